@@ -1,0 +1,22 @@
+#include "quijibo/frame.h"
+
+#include <cmath>
+
+namespace quijibo {
+
+std::string FractalFrame::validate() const {
+  if (!(fractal_radius > 0.0) || !std::isfinite(fractal_radius))
+    return "fractal_radius must be a positive finite number";
+  if (!(padding >= 0.0 && padding < 0.5)) return "padding must be in [0, 0.5)";
+  if (!(scale > 0.0) || !std::isfinite(scale)) return "scale must be a positive finite number";
+  for (double t : translation)
+    if (!std::isfinite(t)) return "translation must be finite";
+  return {};
+}
+
+GridFrame TargetGridFrame(int n, const FractalFrame& frame) {
+  const double side = frame.fractal_radius * (1.0 - 2.0 * frame.padding) * (n + 2.0) / n;
+  return GridFrame::Cube(n, {0.0, 0.0, 0.0}, side);
+}
+
+}  // namespace quijibo

@@ -1,0 +1,46 @@
+// The coordinate frames every stage shares.
+//
+//   user frame        the coordinates of the input mesh
+//   normalized frame  p = scale * x + translation: the mesh's bounding box centred at
+//                     (0.5, 0.5, 0.5), its longest side 1 - 2 * padding (default padding 0.125,
+//                     as the reference code; so the mesh spans [0.125, 0.875] on that axis)
+//   fractal frame     w = fractal_radius * (p - 0.5) (default radius 4): where roots live and the
+//                     map is iterated. A point w becomes the quaternion [w_x, w_y, w_z, slice].
+//
+// Every file that holds coordinates records this transform, so results can be mapped back onto
+// the user's mesh: x = (w / fractal_radius + 0.5 - translation) / scale.
+#pragma once
+
+#include "quijibo/grid.h"
+
+namespace quijibo {
+
+struct FractalFrame {
+  double fractal_radius = 4.0;
+  double padding = 0.125;
+  // Normalization of the user's mesh into the unit cube (identity when no mesh is involved).
+  double scale = 1.0;
+  Vec3 translation{0.0, 0.0, 0.0};
+
+  Vec3 user_to_fractal(const Vec3& x) const {
+    Vec3 w;
+    for (int a = 0; a < 3; ++a) w[a] = fractal_radius * (scale * x[a] + translation[a] - 0.5);
+    return w;
+  }
+  Vec3 fractal_to_user(const Vec3& w) const {
+    Vec3 x;
+    for (int a = 0; a < 3; ++a) x[a] = (w[a] / fractal_radius + 0.5 - translation[a]) / scale;
+    return x;
+  }
+  // Lengths scale by this factor from the user frame to the fractal frame.
+  double user_to_fractal_scale() const { return fractal_radius * scale; }
+  std::string validate() const;
+};
+
+// The target grid of resolution n in the fractal frame: a cube centred at the origin (the centre
+// of the mesh's bounding box) whose side is the mesh's longest side plus one cell on each side,
+// radius * (1 - 2 * padding) * (n + 2) / n, as the reference code's SDF box, but sampled at cell
+// centres without its half-cell shift. For n = 97 and the defaults: side 3.0619, cell 0.03157.
+GridFrame TargetGridFrame(int n, const FractalFrame& frame);
+
+}  // namespace quijibo
