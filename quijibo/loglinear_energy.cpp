@@ -1,0 +1,233 @@
+#include "quijibo/loglinear_energy.h"
+
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "quijibo/error.h"
+
+namespace quijibo {
+
+using Storage = LogLinearOptions::Storage;
+
+std::string LogLinearOptions::validate() const {
+  if (!(memory_budget_bytes >= 0)) return "memory budget must be >= 0";
+  return {};
+}
+
+Storage ParseStorage(const std::string& name) {
+  if (name == "auto") return Storage::kAuto;
+  if (name == "double") return Storage::kDouble;
+  if (name == "float") return Storage::kFloat;
+  if (name == "on-the-fly" || name == "none") return Storage::kOnTheFly;
+  throw Error("unknown log-distance storage \"" + name + "\": expected auto, double, float or on-the-fly");
+}
+
+std::string StorageName(Storage s) {
+  switch (s) {
+    case Storage::kAuto: return "auto";
+    case Storage::kDouble: return "double";
+    case Storage::kFloat: return "float";
+    case Storage::kOnTheFly: return "on-the-fly";
+  }
+  return "?";
+}
+
+LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
+                                 const EnergyOptions& options, const LogLinearOptions& loglinear)
+    : frame_(grid.frame), slice_(grid.slice), eta_(grid.eta), options_(options), storage_(loglinear.storage) {
+  const auto start = std::chrono::steady_clock::now();
+  if (auto why = options.validate(); !why.empty()) throw Error("energy options: " + why);
+  if (auto why = loglinear.validate(); !why.empty()) throw Error("loglinear options: " + why);
+  if (auto why = map.validate(); !why.empty()) throw Error("map: " + why);
+  total_cells_ = grid.frame.cell_count();
+  if (std::int64_t(grid.weight.size()) != total_cells_)
+    throw Error("energy grid: weight count does not match the grid");
+  nt_ = map.top_count();
+  nb_ = map.bottom_count();
+  roots_ = map.top_roots;
+  roots_.insert(roots_.end(), map.bottom_roots.begin(), map.bottom_roots.end());
+  const std::vector<char> singular = SingularCells(map, grid, &singular_);
+  for (std::int64_t c = 0; c < total_cells_; ++c)
+    if (!singular[c]) {
+      cells_.push_back(c);
+      weight_.push_back(grid.weight[c]);
+    }
+  const std::int64_t m = std::int64_t(cells_.size());
+  const int r = root_count();
+  if (storage_ == Storage::kAuto)
+    storage_ = double(m) * r * sizeof(double) <= loglinear.memory_budget_bytes ? Storage::kDouble
+                                                                                : Storage::kOnTheFly;
+  if (storage_ == Storage::kDouble || storage_ == Storage::kFloat) {
+    if (storage_ == Storage::kDouble) d_double_.resize(std::size_t(m) * r);
+    else d_float_.resize(std::size_t(m) * r);
+#pragma omp parallel
+    {
+      std::vector<double> row(r);
+#pragma omp for schedule(static)
+      for (std::int64_t a = 0; a < m; ++a) {
+        Row(a, row.data());
+        if (storage_ == Storage::kDouble) std::copy(row.begin(), row.end(), d_double_.begin() + a * r);
+        else
+          for (int j = 0; j < r; ++j) d_float_[std::size_t(a) * r + j] = float(row[j]);
+      }
+    }
+  }
+  setup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+LogLinearEnergy::~LogLinearEnergy() = default;
+
+std::size_t LogLinearEnergy::matrix_bytes() const {
+  return d_double_.size() * sizeof(double) + d_float_.size() * sizeof(float);
+}
+
+void LogLinearEnergy::Row(std::int64_t active, double* out) const {
+  const Vec3 p = frame_.cell_center(cells_[std::size_t(active)]);
+  const int r = root_count();
+  for (int j = 0; j < r; ++j) {
+    const Vec4& t = roots_[j];
+    const double a = p[0] - t[0], b = p[1] - t[1], c = p[2] - t[2], d = slice_ - t[3];
+    out[j] = 0.5 * std::log(a * a + b * b + c * c + d * d);
+  }
+}
+
+void LogLinearEnergy::CheckX(const Eigen::VectorXd& x) const {
+  if (x.size() != 3 + root_count())
+    throw Error("energy: variable vector has " + std::to_string(x.size()) + " entries, expected " +
+                std::to_string(3 + root_count()));
+  for (Eigen::Index i = 0; i < x.size(); ++i)
+    if (!std::isfinite(x[i])) throw Error("energy: variable " + std::to_string(i) + " is not finite");
+}
+
+void LogLinearEnergy::BeginVariablePass(const Eigen::VectorXd& x) {
+  CheckX(x);
+  const std::int64_t m = std::int64_t(cells_.size());
+  const int r = root_count();
+  s_top_.assign(std::size_t(m), 0.0);
+  s_bottom_.assign(std::size_t(m), 0.0);
+  const double* e = x.data() + 3;
+#pragma omp parallel
+  {
+    std::vector<double> buffer(r);
+#pragma omp for schedule(static)
+    for (std::int64_t a = 0; a < m; ++a) {
+      const double* row = buffer.data();
+      if (storage_ == Storage::kDouble) row = d_double_.data() + std::size_t(a) * r;
+      else if (storage_ == Storage::kFloat)
+        for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
+      else Row(a, buffer.data());
+      double st = 0, sb = 0;
+      for (int j = 0; j < nt_; ++j) st += e[j] * row[j];
+      for (int j = nt_; j < r; ++j) sb += e[j] * row[j];
+      s_top_[a] = st;
+      s_bottom_[a] = sb;
+    }
+  }
+}
+
+Evaluation<double> LogLinearEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mode,
+                                             bool with_gradient) const {
+  const auto start = std::chrono::steady_clock::now();
+  CheckX(x);
+  const bool variable = mode == EnergyMode::kVariable;
+  if (variable && s_top_.size() != cells_.size())
+    throw Error("energy: a V-pass evaluation needs BeginVariablePass first");
+  const std::int64_t m = std::int64_t(cells_.size());
+  const int r = root_count();
+  const double lnC = x[0], tau = x[1], beta = x[2], alpha = options_.alpha;
+  // L_c = ln C + sum_j coeff_j D_cj, coeff = [tau T, -beta B].
+  std::vector<double> coeff(r);
+  for (int j = 0; j < nt_; ++j) coeff[j] = tau * x[3 + j];
+  for (int j = nt_; j < r; ++j) coeff[j] = -beta * x[3 + j];
+  const int ng = with_gradient ? (variable ? 3 : r + 3) : 0;
+  // Block partials: [energy, sum g, sum g S_T, sum g S_B] and, in full mode, G_r.
+  const int nb_vals = 4 + (with_gradient && !variable ? r : 0);
+  const std::int64_t nblocks = (m + kEnergyBlock - 1) / kEnergyBlock;
+  std::vector<double> partial(std::size_t(nblocks * nb_vals), 0.0);
+
+#pragma omp parallel
+  {
+    std::vector<double> buffer(r);
+#pragma omp for schedule(dynamic, 1)
+    for (std::int64_t blk = 0; blk < nblocks; ++blk) {
+      double* out = partial.data() + blk * nb_vals;
+      double* G = out + 4;
+      double energy = 0, sum_g = 0, sum_gt = 0, sum_gb = 0;
+      const std::int64_t end = std::min(m, (blk + 1) * kEnergyBlock);
+      for (std::int64_t a = blk * kEnergyBlock; a < end; ++a) {
+        double L;
+        const double* row = nullptr;
+        if (variable) {
+          L = lnC + tau * s_top_[a] - beta * s_bottom_[a];
+        } else {
+          if (storage_ == Storage::kDouble) {
+            row = d_double_.data() + std::size_t(a) * r;
+          } else {
+            if (storage_ == Storage::kFloat)
+              for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
+            else Row(a, buffer.data());
+            row = buffer.data();
+          }
+          double s = 0;
+#pragma omp simd reduction(+ : s)
+          for (int j = 0; j < r; ++j) s += coeff[j] * row[j];
+          L = lnC + s;
+        }
+        const double th = std::tanh(alpha * L);
+        const double W = weight_[a];
+        energy -= th * W;
+        if (!with_gradient) continue;
+        const double g = -alpha * W * (1.0 - th * th);
+        if (g == 0.0) continue;
+        sum_g += g;
+        if (variable) {
+          sum_gt += g * s_top_[a];
+          sum_gb += g * s_bottom_[a];
+        } else {
+#pragma omp simd
+          for (int j = 0; j < r; ++j) G[j] += g * row[j];
+        }
+      }
+      out[0] = energy;
+      out[1] = sum_g;
+      out[2] = sum_gt;
+      out[3] = sum_gb;
+    }
+  }
+
+  std::vector<double> total(std::size_t(nb_vals), 0.0);
+  for (std::int64_t b = 0; b < nblocks; ++b)
+    for (int k = 0; k < nb_vals; ++k) total[k] += partial[std::size_t(b * nb_vals + k)];
+  Evaluation<double> ev;
+  const double inv_eta = 1.0 / eta_;
+  ev.energy = total[0] * inv_eta;
+  if (ng > 0) {
+    ev.gradient = Eigen::VectorXd::Zero(ng);
+    ev.gradient[0] = total[1] * inv_eta;
+    if (variable) {
+      ev.gradient[1] = total[2] * inv_eta;
+      ev.gradient[2] = -total[3] * inv_eta;
+    } else {
+      const double* G = total.data() + 4;
+      double d_tau = 0, d_beta = 0;
+      for (int j = 0; j < nt_; ++j) {
+        d_tau += x[3 + j] * G[j];
+        ev.gradient[3 + j] = tau * G[j] * inv_eta;
+      }
+      for (int j = nt_; j < r; ++j) {
+        d_beta -= x[3 + j] * G[j];
+        ev.gradient[3 + j] = -beta * G[j] * inv_eta;
+      }
+      ev.gradient[1] = d_tau * inv_eta;
+      ev.gradient[2] = d_beta * inv_eta;
+    }
+  }
+  ev.counts.cells = total_cells_;
+  ev.counts.singular = singular_;
+  ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return ev;
+}
+
+}  // namespace quijibo

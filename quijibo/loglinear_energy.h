@@ -1,0 +1,74 @@
+// The exact fast evaluator (design brief §3.1), in double.
+//
+// Because |p q| = |p| |q| and |p^a| = |p|^a for quaternions, one application of the map has
+//   L_c = ln C + tau sum_i T_i D_ci - beta sum_i B_i D_cj,     D_cr = log|q_c - root_r|,
+// whatever the order of the products. The roots do not move during the optimization, so D is
+// fixed per level: L for all cells is one matrix-vector product and the gradient is one
+// transposed product (G_r = sum_c dpsi/dL_c D_cr; dpsi/dT_i = tau G_i, dpsi/dtau = sum T_i G_i,
+// and likewise for the bottom roots with a minus sign). Nothing can overflow.
+//
+// A V pass (only ln C, tau, beta move) needs two sums per cell, S_T and S_B, computed once by
+// BeginVariablePass; each evaluation is then O(cells), not O(cells x roots).
+//
+// Storage of D, chosen by measurement (docs/benchmarks.md):
+//   kDouble   precomputed, 8 bytes per cell and root (97^3 x 331: 2.4 GB), exact
+//   kFloat    precomputed, 4 bytes; ~1e-7 relative error in D (not exact, opt-in)
+//   kOnTheFly recomputed at every evaluation, no memory, ~5x slower
+//   kAuto     kDouble if it fits in memory_budget_bytes, else kOnTheFly
+#pragma once
+
+#include <memory>
+
+#include "quijibo/energy.h"
+
+namespace quijibo {
+
+struct LogLinearOptions {
+  enum class Storage { kAuto, kDouble, kFloat, kOnTheFly };
+  Storage storage = Storage::kAuto;
+  double memory_budget_bytes = 3.0e9;  // for kAuto
+  std::string validate() const;
+};
+LogLinearOptions::Storage ParseStorage(const std::string& name);  // auto|double|float|on-the-fly
+std::string StorageName(LogLinearOptions::Storage s);
+
+class LogLinearEnergy {
+ public:
+  LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid, const EnergyOptions& options = {},
+                  const LogLinearOptions& loglinear = {});
+  ~LogLinearEnergy();
+
+  // psi and its gradient at x = [ln C, tau, beta, T..., B...]. kVariable mode needs
+  // BeginVariablePass first and uses only x[0..2]; its gradient has 3 entries.
+  Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode = EnergyMode::kFull,
+                              bool with_gradient = true) const;
+  // Fixes the exponents T and B of x for the following kVariable evaluations: O(cells x roots).
+  void BeginVariablePass(const Eigen::VectorXd& x);
+
+  LogLinearOptions::Storage storage() const { return storage_; }
+  std::size_t matrix_bytes() const;
+  double setup_seconds() const { return setup_seconds_; }
+
+  // log|q_c - root_r| for active cell c (floored at the singular-cell exclusion).
+  int root_count() const { return nt_ + nb_; }
+
+ private:
+  void Row(std::int64_t active, double* out) const;  // D row of an active cell
+  void CheckX(const Eigen::VectorXd& x) const;
+
+  int nt_ = 0, nb_ = 0;
+  std::vector<Vec4> roots_;            // top then bottom
+  std::vector<std::int64_t> cells_;    // grid index of each active (non-singular) cell
+  std::vector<double> weight_;         // W of each active cell
+  GridFrame frame_;
+  double slice_ = 0, eta_ = 1;
+  std::int64_t total_cells_ = 0, singular_ = 0;
+  EnergyOptions options_;
+  LogLinearOptions::Storage storage_;
+  std::vector<double> d_double_;
+  std::vector<float> d_float_;
+  std::vector<double> s_top_, s_bottom_;  // V-pass sums
+  double setup_seconds_ = 0;
+};
+
+}  // namespace quijibo

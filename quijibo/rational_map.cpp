@@ -1,0 +1,191 @@
+#include "quijibo/rational_map.h"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "quijibo/error.h"
+#include "quijibo/io.h"
+#include "quijibo/json_reader.h"
+
+namespace quijibo {
+
+using nlohmann::json;
+
+Eigen::VectorXd RationalMap::variables() const {
+  Eigen::VectorXd x(variable_count());
+  x[VariableIndex::kLnC] = ln_C;
+  x[VariableIndex::kTau] = tau;
+  x[VariableIndex::kBeta] = beta;
+  for (int i = 0; i < top_count(); ++i) x[VariableIndex::top(i)] = top_exponents[i];
+  for (int i = 0; i < bottom_count(); ++i) x[VariableIndex::bottom(*this, i)] = bottom_exponents[i];
+  return x;
+}
+
+void RationalMap::set_variables(const Eigen::VectorXd& x) {
+  if (x.size() != variable_count())
+    throw Error("variable vector has " + std::to_string(x.size()) + " entries, the map needs " +
+                std::to_string(variable_count()));
+  ln_C = x[VariableIndex::kLnC];
+  tau = x[VariableIndex::kTau];
+  beta = x[VariableIndex::kBeta];
+  for (int i = 0; i < top_count(); ++i) top_exponents[i] = x[VariableIndex::top(i)];
+  for (int i = 0; i < bottom_count(); ++i) bottom_exponents[i] = x[VariableIndex::bottom(*this, i)];
+}
+
+Eigen::VectorXd RationalMap::lower_bounds() const {
+  Eigen::VectorXd lb = Eigen::VectorXd::Zero(variable_count());
+  lb[VariableIndex::kLnC] = -std::numeric_limits<double>::infinity();
+  return lb;
+}
+
+std::string RationalMap::validate() const {
+  if (top_roots.size() != top_exponents.size()) return "top roots and exponents differ in count";
+  if (bottom_roots.size() != bottom_exponents.size())
+    return "bottom roots and exponents differ in count";
+  if (!std::isfinite(ln_C)) return "ln_C must be finite";
+  if (!(tau >= 0 && std::isfinite(tau))) return "tau must be finite and >= 0";
+  if (!(beta >= 0 && std::isfinite(beta))) return "beta must be finite and >= 0";
+  auto check = [](const std::vector<Vec4>& roots, const std::vector<double>& e,
+                  const char* which) -> std::string {
+    for (std::size_t i = 0; i < roots.size(); ++i) {
+      for (double c : roots[i])
+        if (!std::isfinite(c)) return std::string(which) + " root " + std::to_string(i) + " is not finite";
+      if (!(e[i] >= 0 && std::isfinite(e[i])))
+        return std::string(which) + " exponent " + std::to_string(i) + " must be finite and >= 0";
+    }
+    return {};
+  };
+  if (auto s = check(top_roots, top_exponents, "top"); !s.empty()) return s;
+  if (auto s = check(bottom_roots, bottom_exponents, "bottom"); !s.empty()) return s;
+  if (leading_zero_roots) {
+    const Vec4 zero{0, 0, 0, 0};
+    if (top_roots.empty() || bottom_roots.empty() || top_roots[0] != zero || bottom_roots[0] != zero)
+      return "leading_zero_roots is set but the first top and bottom roots are not at the origin";
+  }
+  return frame.validate();
+}
+
+json MapToJson(const RationalMap& m) {
+  json j;
+  j["format"] = "quijibo-map";
+  j["version"] = 1;
+  j["frame"] = {{"fractal_radius", m.frame.fractal_radius},
+                {"padding", m.frame.padding},
+                {"scale", m.frame.scale},
+                {"translation", m.frame.translation}};
+  j["ln_C"] = m.ln_C;
+  j["tau"] = m.tau;
+  j["beta"] = m.beta;
+  j["leading_zero_roots"] = m.leading_zero_roots;
+  auto roots = [](const std::vector<Vec4>& r, const std::vector<double>& e) {
+    json a = json::array();
+    for (std::size_t i = 0; i < r.size(); ++i) a.push_back({{"root", r[i]}, {"exponent", e[i]}});
+    return a;
+  };
+  j["top"] = roots(m.top_roots, m.top_exponents);
+  j["bottom"] = roots(m.bottom_roots, m.bottom_exponents);
+  j["provenance"] = m.provenance;
+  return j;
+}
+
+RationalMap MapFromJson(const json& j, const std::string& source) {
+  JsonReader r(j, source);
+  if (!j.is_object()) r.fail("", "expected a JSON object (a quijibo map), found " + JsonReader::describe(j));
+  r.allow_keys("", {"format", "version", "frame", "ln_C", "tau", "beta", "leading_zero_roots",
+                    "top", "bottom", "provenance"});
+  if (r.string("/format") != "quijibo-map") r.fail("/format", "expected \"quijibo-map\"");
+  if (r.integer("/version") != 1) r.fail("/version", "expected 1 (the only version so far)");
+  RationalMap m;
+  if (r.has("/frame")) {
+    r.allow_keys("/frame", {"fractal_radius", "padding", "scale", "translation"});
+    m.frame.fractal_radius = r.number_or("/frame/fractal_radius", m.frame.fractal_radius);
+    m.frame.padding = r.number_or("/frame/padding", m.frame.padding);
+    m.frame.scale = r.number_or("/frame/scale", m.frame.scale);
+    if (r.has("/frame/translation")) {
+      if (r.array_size("/frame/translation") != 3)
+        r.fail("/frame/translation", "expected an array of 3 numbers");
+      for (int a = 0; a < 3; ++a)
+        m.frame.translation[a] = r.number("/frame/translation/" + std::to_string(a));
+    }
+    if (auto why = m.frame.validate(); !why.empty()) r.fail("/frame", why);
+  }
+  m.ln_C = r.number("/ln_C");
+  m.tau = r.number_at_least("/tau", 0.0);
+  m.beta = r.number_at_least("/beta", 0.0);
+  m.leading_zero_roots = r.boolean_or("/leading_zero_roots", false);
+  auto roots = [&](const std::string& which, std::vector<Vec4>& pos, std::vector<double>& e) {
+    const std::size_t n = r.array_size("/" + which);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::string p = "/" + which + "/" + std::to_string(i);
+      r.allow_keys(p, {"root", "exponent"});
+      const std::size_t k = r.array_size(p + "/root");
+      if (k != 4 && k != 3)
+        r.fail(p + "/root", "expected [x, y, z] or the quaternion [real, i, j, k], found " +
+                                std::to_string(k) + " numbers");
+      Vec4 q{0, 0, 0, 0};
+      for (std::size_t c = 0; c < k; ++c) q[c] = r.number(p + "/root/" + std::to_string(c));
+      pos.push_back(q);
+      e.push_back(r.number_at_least(p + "/exponent", 0.0));
+    }
+  };
+  roots("top", m.top_roots, m.top_exponents);
+  roots("bottom", m.bottom_roots, m.bottom_exponents);
+  if (r.has("/provenance")) m.provenance = r.at("/provenance");
+  if (auto why = m.validate(); !why.empty()) r.fail("", why);
+  return m;
+}
+
+void WriteMap(const std::string& path, const RationalMap& map) {
+  if (auto why = map.validate(); !why.empty()) throw Error(path + ": refusing to write map: " + why);
+  WriteFileAtomically(path, MapToJson(map).dump(1) + "\n");
+}
+
+RationalMap ReadMap(const std::string& path) {
+  return MapFromJson(ParseJson(ReadFile(path), path), path);
+}
+
+std::string RandomMapOptions::validate() const {
+  if (top < 0 || bottom < 0) return "root counts must be >= 0";
+  if (!(root_radius > 0)) return "root_radius must be > 0";
+  if (!(exponent_min >= 0 && exponent_max >= exponent_min)) return "need 0 <= exponent_min <= exponent_max";
+  if (leading_zero_roots && (top < 1 || bottom < 1)) return "leading zero roots need a top and a bottom root";
+  return {};
+}
+
+RationalMap RandomMap(const RandomMapOptions& o) {
+  if (auto why = o.validate(); !why.empty()) throw Error("random map: " + why);
+  // mt19937_64 and hand-made uniform draws: std::uniform_real_distribution's output is not
+  // specified bit-for-bit across standard libraries.
+  std::mt19937_64 rng(o.seed);
+  auto uniform = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+  auto root = [&] {
+    for (;;) {
+      Vec4 p{2 * uniform() - 1, 2 * uniform() - 1, 2 * uniform() - 1, 0.0};
+      const double r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+      if (r2 <= 1.0 && r2 > 0.0) {
+        for (int a = 0; a < 3; ++a) p[a] *= o.root_radius;
+        return p;
+      }
+    }
+  };
+  auto exponent = [&] { return o.exponent_min + (o.exponent_max - o.exponent_min) * uniform(); };
+  RationalMap m;
+  m.ln_C = o.ln_C;
+  m.leading_zero_roots = o.leading_zero_roots;
+  for (int i = 0; i < o.top; ++i) {
+    const bool zero = o.leading_zero_roots && i == 0;
+    m.top_roots.push_back(zero ? Vec4{0, 0, 0, 0} : root());
+    m.top_exponents.push_back(zero ? 1.0 : exponent());
+  }
+  for (int i = 0; i < o.bottom; ++i) {
+    const bool zero = o.leading_zero_roots && i == 0;
+    m.bottom_roots.push_back(zero ? Vec4{0, 0, 0, 0} : root());
+    m.bottom_exponents.push_back(zero ? 1.0 : exponent());
+  }
+  m.provenance = {{"made_by", "random"}, {"seed", o.seed}, {"top", o.top}, {"bottom", o.bottom},
+                  {"root_radius", o.root_radius}, {"exponent_range", {o.exponent_min, o.exponent_max}}};
+  return m;
+}
+
+}  // namespace quijibo

@@ -1,0 +1,100 @@
+// RationalMap: the factored quaternion rational map of the 2015 paper (Eqns 4 and 8),
+//
+//   R(q) = e^C T(q) B(q)^-1,   T(q) = prod_i (q - t_i)^(tau T_i),   B(q) = prod_i (q - b_i)^(beta B_i),
+//
+// products taken left to right in root order (quaternions do not commute). Roots are quaternions
+// in the fractal frame (frame.h), components (real, i, j, k); a root placed at the spatial point
+// (x, y, z) is [x, y, z, 0]. With `leading_zero_roots` the first top and the first bottom root are
+// the reference code's zero roots (at the origin, exponent 1 initially) and are kept in place.
+//
+// The optimization variables (paper §4.2) are, in this order,
+//   x = [ln C, tau, beta, T_1 .. T_nt, B_1 .. B_nb]
+// with ln C free and every other entry >= 0. ln C rather than C is the variable, as in the
+// reference code: C spans hundreds of orders of magnitude.
+//
+// Stored as `map.json` (docs/formats.md), the file every stage reads and writes.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "quijibo/frame.h"
+#include "quijibo/quaternion.h"
+
+namespace quijibo {
+
+using Vec4 = std::array<double, 4>;
+
+struct RationalMap {
+  std::vector<Vec4> top_roots;
+  std::vector<double> top_exponents;
+  std::vector<Vec4> bottom_roots;
+  std::vector<double> bottom_exponents;
+  double ln_C = 0.0;
+  double tau = 1.0;
+  double beta = 1.0;
+  bool leading_zero_roots = false;
+  FractalFrame frame;
+  // Free-form record of how the map was made (command, seed, monopole fit, optimizer, ...).
+  nlohmann::json provenance = nlohmann::json::object();
+
+  int top_count() const { return int(top_roots.size()); }
+  int bottom_count() const { return int(bottom_roots.size()); }
+  int root_count() const { return top_count() + bottom_count(); }
+  int variable_count() const { return 3 + root_count(); }
+
+  // x = [ln C, tau, beta, T..., B...].
+  Eigen::VectorXd variables() const;
+  void set_variables(const Eigen::VectorXd& x);
+  // Lower bounds of the variables: -inf for ln C, 0 for the rest.
+  Eigen::VectorXd lower_bounds() const;
+
+  // Empty string when consistent, else the first problem found.
+  std::string validate() const;
+
+  template <class Real>
+  Quaternion<Real> top_root(int i) const {
+    const Vec4& r = top_roots[i];
+    return {Real(r[0]), Real(r[1]), Real(r[2]), Real(r[3])};
+  }
+  template <class Real>
+  Quaternion<Real> bottom_root(int i) const {
+    const Vec4& r = bottom_roots[i];
+    return {Real(r[0]), Real(r[1]), Real(r[2]), Real(r[3])};
+  }
+};
+
+// Indices into the variable vector.
+struct VariableIndex {
+  static constexpr int kLnC = 0, kTau = 1, kBeta = 2, kFirstExponent = 3;
+  static int top(int i) { return kFirstExponent + i; }
+  static int bottom(const RationalMap& m, int i) { return kFirstExponent + m.top_count() + i; }
+};
+
+// map.json <-> RationalMap. FromJson reports the first problem as
+// "<source>: <JSON pointer>: expected ..., found ...", and rejects unknown keys.
+nlohmann::json MapToJson(const RationalMap& map);
+RationalMap MapFromJson(const nlohmann::json& j, const std::string& source);
+void WriteMap(const std::string& path, const RationalMap& map);
+RationalMap ReadMap(const std::string& path);
+
+// A seeded random map for tests and benchmarks: roots uniform in the ball of radius
+// `root_radius` on the k = 0 hyperplane, exponents uniform in [exponent_min, exponent_max].
+struct RandomMapOptions {
+  int top = 65;
+  int bottom = 43;
+  double root_radius = 1.5;
+  double exponent_min = 0.5;
+  double exponent_max = 3.0;
+  double ln_C = 0.0;
+  bool leading_zero_roots = false;
+  std::uint64_t seed = 1;
+  std::string validate() const;
+};
+RationalMap RandomMap(const RandomMapOptions& options);
+
+}  // namespace quijibo

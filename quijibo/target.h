@@ -1,0 +1,58 @@
+// The target of the energy: a signed distance field phi (negative inside) on a grid, the weight
+// field W built from it, and the energy grid of one optimization level.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "quijibo/grid.h"
+
+namespace quijibo {
+
+// Analytic targets for tests and demos, sampled on `frame` (fractal frame):
+//   "sphere" / "sphere:radius=1.2"          centred at the origin (default radius 1)
+//   "torus" / "torus:major=1,minor=0.35"    in the z = 0 plane (defaults 1 and 0.35)
+// Throws quijibo::Error on an unknown shape or parameter.
+ScalarGrid AnalyticTarget(const std::string& spec, const GridFrame& frame);
+
+// Which weight field W the energy uses (paper Eqn 6 or the reference code, quijibo-code §4.4).
+enum class WeightField {
+  // Reference default: inverse 6-connected grid-layer distance to the sign interface
+  // (k = 1 on the cells with a 26-neighbour of the other sign), W = -1/k inside, 1/k outside.
+  kLayer,
+  // The paper: W = 1/phi, with |phi| clamped to at least half a cell so W stays finite.
+  kInverse,
+};
+WeightField ParseWeightField(const std::string& name);  // "layer" or "inverse"
+std::string WeightFieldName(WeightField w);
+
+// W on the grid of `sdf`, normalized as the reference code does: the inside cells (phi < 0)
+// sum to -0.5 and the outside cells to +0.5, so sum |W| = 1. Throws if the field has no inside
+// or no outside cell.
+std::vector<double> ComputeWeights(const ScalarGrid& sdf, WeightField field);
+
+// How a coarse level gets its weights (issue: levels).
+enum class LevelWeights {
+  kSampleFinest,  // trilinear samples of the finest W (the reference code)
+  kRecompute,     // sample phi on the level grid and rebuild W there
+};
+
+// The sample points and weights of one level. Sample c is the quaternion
+// [x_c, y_c, z_c, slice] with (x_c, y_c, z_c) = frame.cell_center(c).
+struct EnergyGrid {
+  GridFrame frame;
+  double slice = 0.0;
+  std::vector<double> weight;
+  double eta = 0.0;  // sum |W| on this grid (paper Eqn 7)
+};
+
+// The level of resolution n (cells along the longest axis; n <= 0: the SDF grid itself) over
+// the same box as `sdf`.
+EnergyGrid MakeEnergyGrid(const ScalarGrid& sdf, WeightField field, int n = 0,
+                          LevelWeights level_weights = LevelWeights::kSampleFinest,
+                          double slice = 0.0);
+// Same, from a precomputed finest weight field (avoids recomputing W at every level).
+EnergyGrid MakeEnergyGrid(const ScalarGrid& sdf, const std::vector<double>& finest_weight,
+                          WeightField field, int n, LevelWeights level_weights, double slice);
+
+}  // namespace quijibo
