@@ -1,6 +1,44 @@
-#include <CLI/CLI.hpp>
+// quijibo: from a mesh to a quaternion Julia set of its shape.
+#include <cstdio>
+#include <exception>
+
+#include "experiments/cli.h"
+#include "quijibo/error.h"
+#include "quijibo/progress.h"
+
 int main(int argc, char** argv) {
-  CLI::App app{"quijibo"};
-  CLI11_PARSE(app, argc, argv);
+  CLI::App app{
+      "quijibo: quaternion Julia sets shaped like a mesh (QUIJIBO, Kim 2015), with the shape\n"
+      "modulus (2023) and portals (2024) for comparison. See README.md and docs/."};
+  app.set_version_flag("--version", "quijibo 0.1.0");
+  app.require_subcommand(1);
+  bool quiet = false;
+  app.add_flag("-q,--quiet", quiet, "No progress on stderr");
+  app.parse_complete_callback([&] { quijibo::Progress::globally_quiet() = quiet; });
+  quijibo::cli::AddEnergyCommand(app);
+  quijibo::cli::AddMapCommand(app);
+  quijibo::cli::AddTargetCommand(app);
+  quijibo::cli::AddBenchCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "quijibo: error: %s (see --help)\n", e.what());
+    return 2;
+  } catch (const quijibo::Error& e) {
+    std::fprintf(stderr, "quijibo: error: %s\n", e.what());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "quijibo: error: out of memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "quijibo: error: %s\n", e.what());
+    return 1;
+  }
   return 0;
 }

@@ -36,9 +36,7 @@ Quaternion<Real> Factor(const Quaternion<Real>& q, const std::vector<Quaternion<
   const Q one(Real(1), Real(0), Real(0), Real(0));
   const int n = int(roots.size());
   for (int i = 0; i < n; ++i) {
-    lg[i] = log(q - roots[i]);
-    const Real a = bulk * exponents[i];
-    factor[i] = a == Real(0) ? one : exp(lg[i] * a);
+    LogAndPower(q - roots[i], bulk * exponents[i], lg[i], factor[i]);
     fwd[i] = i == 0 ? factor[i] : fwd[i - 1] * factor[i];
   }
   for (int i = n - 1; i >= 0; --i) rev[i] = i == n - 1 ? factor[i] : factor[i] * rev[i + 1];

@@ -115,6 +115,37 @@ Quaternion<Real> pow(const Quaternion<Real>& q, const Real& a) {
   return exp(log(q) * a);
 }
 
+// Fused log and power of one quaternion: lg = log(d) and p = d^a = exp(a lg), sharing the
+// norms and the angle (the evaluators need both for every root of every cell).
+template <class Real>
+void LogAndPower(const Quaternion<Real>& d, const Real& a, Quaternion<Real>& lg, Quaternion<Real>& p) {
+  using std::atan2;
+  using std::cos;
+  using std::exp;
+  using std::log;
+  using std::sin;
+  using std::sqrt;
+  const Real v2 = d.x * d.x + d.y * d.y + d.z * d.z;
+  const Real vn = sqrt(v2);
+  const Real log_norm = Real(0.5) * log(d.w * d.w + v2);
+  const Real theta = atan2(vn, d.w);
+  Real ax(1), ay(0), az(0);  // axis i for reals, as log()
+  if (vn > Real(0)) {
+    const Real inv = Real(1) / vn;
+    ax = d.x * inv;
+    ay = d.y * inv;
+    az = d.z * inv;
+  }
+  lg = {log_norm, ax * theta, ay * theta, az * theta};
+  if (a == Real(0)) {
+    p = {Real(1), Real(0), Real(0), Real(0)};
+    return;
+  }
+  const Real m = exp(a * log_norm), phi = a * theta;
+  const Real s = m * sin(phi);
+  p = {m * cos(phi), ax * s, ay * s, az * s};
+}
+
 template <class Real>
 std::ostream& operator<<(std::ostream& o, const Quaternion<Real>& q) {
   return o << "[" << q.w << ", " << q.x << ", " << q.y << ", " << q.z << "]";

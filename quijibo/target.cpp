@@ -150,6 +150,11 @@ std::vector<double> LayerWeights(const ScalarGrid& sdf) {
 }  // namespace
 
 std::vector<double> ComputeWeights(const ScalarGrid& sdf, WeightField field) {
+  std::int64_t inside = 0;
+  for (double phi : sdf.values) inside += phi < 0;
+  if (inside == 0) throw Error("target has no cell inside the shape: nothing to fit");
+  if (inside == std::int64_t(sdf.values.size()))
+    throw Error("target has no cell outside the shape: enlarge the grid");
   std::vector<double> w;
   if (field == WeightField::kLayer) {
     w = LayerWeights(sdf);

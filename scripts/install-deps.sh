@@ -9,6 +9,7 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev libpng-dev
   libgtest-dev libbenchmark-dev
   gnuplot-nox
+  libassimp-dev
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -86,3 +86,21 @@ TYPED_TEST(QuaternionTest, PowerIsRightForEveryExponentSign) {
 
 }  // namespace
 }  // namespace quijibo
+
+namespace quijibo {
+namespace {
+TYPED_TEST(QuaternionTest, FusedLogAndPowerMatchesLogAndPow) {
+  using Real = TypeParam;
+  using Q = Quaternion<Real>;
+  std::mt19937_64 rng(5);
+  for (int n = 0; n < 30; ++n) {
+    const Q d = Random<Real>(rng);
+    const Real a = Real(-2.5 + 0.2 * n);
+    Q lg, p;
+    LogAndPower(d, a, lg, p);
+    EXPECT_LE(Dist(lg, log(d)), Tol<Real>() * 16);
+    EXPECT_LE(Dist(p, pow(d, a)), Tol<Real>() * 64);
+  }
+}
+}  // namespace
+}  // namespace quijibo

@@ -1,0 +1,44 @@
+// Shared pieces of the `quijibo` command line: subcommand registration and target loading.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "quijibo/energy.h"
+#include "quijibo/grid.h"
+#include "quijibo/loglinear_energy.h"
+#include "quijibo/real.h"
+
+namespace quijibo::cli {
+
+void AddEnergyCommand(CLI::App& app);
+void AddMapCommand(CLI::App& app);
+void AddTargetCommand(CLI::App& app);
+void AddBenchCommand(CLI::App& app);
+
+// A target given on the command line: a .qgrid file, or an analytic shape ("sphere",
+// "torus:major=1,minor=0.3") sampled on the default target box (frame.h, TargetGridFrame)
+// at `resolution`.
+ScalarGrid LoadTarget(const std::string& spec, int resolution);
+
+// Which evaluator, in which precision, on which variables.
+struct EvaluatorChoice {
+  std::string evaluator = "loglinear";  // "loglinear" or "cached"
+  Precision precision = Precision::kDouble;
+  LogLinearOptions::Storage storage = LogLinearOptions::Storage::kAuto;
+  EnergyMode mode = EnergyMode::kFull;
+  bool gradient = true;
+  int repeats = 1;
+};
+
+// Evaluates psi (and its gradient) of `map` on `grid` `repeats` times; returns a JSON report:
+// energy (number and exact decimal string), gradient (numbers, named, and exact strings),
+// cell counts, seconds of each evaluation and their median, set-up seconds, storage used.
+nlohmann::json EvaluateEnergy(const RationalMap& map, const EnergyGrid& grid,
+                              const EnergyOptions& options, const EvaluatorChoice& choice);
+
+// Writes text to path atomically, or to stdout when path is empty or "-".
+void WriteOutput(const std::string& path, const std::string& text);
+
+}  // namespace quijibo::cli

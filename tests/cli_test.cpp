@@ -1,0 +1,128 @@
+// The `quijibo` command as a user meets it: exit codes, one-line errors, JSON output.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "quijibo/rational_map.h"
+
+namespace quijibo {
+namespace {
+
+struct CommandResult {
+  int code;
+  std::string out;
+};
+
+CommandResult Quijibo(const std::string& args) {
+  const std::string cmd = std::string(QUIJIBO_BINARY) + " --quiet " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("quijibo_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  void Write(const std::string& name, const std::string& text) const { std::ofstream(Path(name)) << text; }
+  std::filesystem::path dir_;
+};
+
+TEST_F(CliTest, HelpListsTheSubcommands) {
+  const CommandResult r = Quijibo("--help");
+  EXPECT_EQ(r.code, 0);
+  for (const char* s : {"energy", "map", "target", "bench"}) EXPECT_NE(r.out.find(s), std::string::npos) << s;
+  EXPECT_EQ(Quijibo("energy --help").code, 0);
+  EXPECT_NE(Quijibo("").code, 0);
+  EXPECT_NE(Quijibo("no-such-command").code, 0);
+}
+
+TEST_F(CliTest, EnergyOfARandomMapIsJsonWithGradientAndDiagnostics) {
+  const std::string map = Path("map.json");
+  ASSERT_EQ(Quijibo("map random --top 5 --bottom 4 --seed 2 --center-on sphere --target-resolution 12 -o " + map).code, 0);
+  const CommandResult r = Quijibo("energy -t sphere --target-resolution 12 -m " + map);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["energy"].get<double>(), -1.0);
+  EXPECT_LT(j["energy"].get<double>(), 1.0);
+  EXPECT_EQ(j["gradient"]["top"].size(), 5u);
+  EXPECT_EQ(j["gradient"]["bottom"].size(), 4u);
+  EXPECT_EQ(j["overflowed_cells"], 0);
+  EXPECT_EQ(j["cells"], 12 * 12 * 12);
+  // The same energy from the cached evaluator in long double, via a .qgrid target file.
+  const std::string grid = Path("sphere.qgrid");
+  ASSERT_EQ(Quijibo("target sphere -r 12 -o " + grid).code, 0);
+  const CommandResult c = Quijibo("energy -t " + grid + " -m " + map + " -e cached -p long-double");
+  ASSERT_EQ(c.code, 0) << c.out;
+  EXPECT_NEAR(nlohmann::json::parse(c.out)["energy"].get<double>(), j["energy"].get<double>(), 1e-13);
+}
+
+TEST_F(CliTest, BadInputGetsOneClearLineAndNonZeroExit) {
+  auto expect_error = [&](const std::string& args, const std::string& needle) {
+    const CommandResult r = Quijibo(args);
+    EXPECT_NE(r.code, 0) << args;
+    EXPECT_NE(r.out.find(needle), std::string::npos) << args << "\n got: " << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+  };
+  RationalMap m;
+  m.top_roots = {{0.5, 0, 0, 0}};
+  m.top_exponents = {1.0};
+  const std::string good = Path("good.json");
+  WriteMap(good, m);
+
+  expect_error("energy -t sphere -m " + Path("missing.json"), "missing.json");
+  Write("syntax.json", "{\n \"format\": \"quijibo-map\",\n \"version\": 1,\n oops\n}");
+  expect_error("energy -t sphere -m " + Path("syntax.json"), "syntax.json:4:");
+  std::string text = MapToJson(m).dump();
+  Write("negative.json", nlohmann::json::parse(text).dump().replace(text.find("\"exponent\":1.0"), 14, "\"exponent\":-1"));
+  expect_error("energy -t sphere -m " + Path("negative.json"), "/top/0/exponent: expected a number >= 0");
+  auto j = MapToJson(m);
+  j["tua"] = 1.0;
+  Write("typo.json", j.dump());
+  expect_error("energy -t sphere -m " + Path("typo.json"), "did you mean \"tau\"");
+  j = MapToJson(m);
+  j["ln_C"] = "zero";
+  Write("type.json", j.dump());
+  expect_error("energy -t sphere -m " + Path("type.json"), "/ln_C: expected a number, found string");
+  expect_error("energy -t cube -m " + good, "unknown analytic target \"cube\"");
+  expect_error("energy -t sphere:radius=-1 -m " + good, "radius must be > 0");
+  expect_error("energy -t sphere -m " + good + " -p float", "loglinear evaluator runs in double only");
+  expect_error("energy -t sphere -m " + good + " --target-resolution 0", "target-resolution");
+  expect_error("energy -t " + Path("nothing.qgrid") + " -m " + good, "nothing.qgrid");
+  Write("bad.qgrid", "not a grid");
+  expect_error("energy -t " + Path("bad.qgrid") + " -m " + good, "not a .qgrid file");
+  expect_error("energy -t sphere:radius=9 --target-resolution 8 -m " + good, "no cell outside");
+}
+
+TEST_F(CliTest, FailedWritesLeaveNoFileBehind) {
+  const std::string out = Path("sub/dir/map.json");  // folder does not exist
+  const CommandResult r = Quijibo("map random --top 2 --bottom 2 -o " + out);
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.out.find("cannot write"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+TEST_F(CliTest, RandomMapsAreDeterministic) {
+  ASSERT_EQ(Quijibo("map random --top 30 --bottom 20 --seed 9 -o " + Path("a.json")).code, 0);
+  ASSERT_EQ(Quijibo("map random --top 30 --bottom 20 --seed 9 -o " + Path("b.json")).code, 0);
+  std::ifstream a(Path("a.json")), b(Path("b.json"));
+  const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_EQ(sa, sb);
+  EXPECT_EQ(ReadMap(Path("a.json")).top_count(), 30);
+}
+
+}  // namespace
+}  // namespace quijibo
