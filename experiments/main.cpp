@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
   quijibo::cli::AddMapCommand(app);
   quijibo::cli::AddTargetCommand(app);
   quijibo::cli::AddBenchCommand(app);
+  quijibo::cli::AddOptimizeCommand(app);
+  quijibo::cli::AddPlotCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

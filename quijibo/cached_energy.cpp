@@ -59,6 +59,14 @@ CachedEnergy<Real>::CachedEnergy(const RationalMap& map, const EnergyGrid& grid,
 }
 
 template <class Real>
+void CachedEnergy<Real>::SetWeights(const std::vector<double>& grid_weight, double eta) {
+  if (grid_weight.size() != weight_.size()) throw Error("weights do not match the energy grid");
+  if (!(eta > 0) || !std::isfinite(eta)) throw Error("eta must be positive and finite");
+  weight_ = grid_weight;
+  eta_ = eta;
+}
+
+template <class Real>
 Evaluation<Real> CachedEnergy<Real>::Evaluate(const Vector& x, EnergyMode mode,
                                               bool with_gradient) const {
   using std::exp;
@@ -84,7 +92,7 @@ Evaluation<Real> CachedEnergy<Real>::Evaluate(const Vector& x, EnergyMode mode,
   std::vector<std::int64_t> block_overflow(std::size_t(nblocks), 0);
   const Q one(Real(1), Real(0), Real(0), Real(0));
 
-#pragma omp parallel
+#pragma omp parallel if (nblocks > 1)
   {
     Caches<Real> w(nt, nb, ng);
 #pragma omp for schedule(dynamic, 1)

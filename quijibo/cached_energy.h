@@ -42,6 +42,9 @@ class CachedEnergy {
     return Evaluate(Vector(x.cast<Real>()), mode, with_gradient);
   }
 
+  // Replaces the weights (one per grid cell) and eta, e.g. for the reweighted pass.
+  void SetWeights(const std::vector<double>& grid_weight, double eta);
+
   int top_count() const { return int(top_.size()); }
   int bottom_count() const { return int(bottom_.size()); }
   std::int64_t cell_count() const { return std::int64_t(weight_.size()); }

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "quijibo/error.h"
 
@@ -62,7 +63,7 @@ LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
   if (storage_ == Storage::kDouble || storage_ == Storage::kFloat) {
     if (storage_ == Storage::kDouble) d_double_.resize(std::size_t(m) * r);
     else d_float_.resize(std::size_t(m) * r);
-#pragma omp parallel
+#pragma omp parallel if (m > kEnergyBlock)
     {
       std::vector<double> row(r);
 #pragma omp for schedule(static)
@@ -101,6 +102,39 @@ void LogLinearEnergy::CheckX(const Eigen::VectorXd& x) const {
     if (!std::isfinite(x[i])) throw Error("energy: variable " + std::to_string(i) + " is not finite");
 }
 
+void LogLinearEnergy::SetWeights(const std::vector<double>& grid_weight, double eta) {
+  if (std::int64_t(grid_weight.size()) != total_cells_) throw Error("weights do not match the energy grid");
+  if (!(eta > 0) || !std::isfinite(eta)) throw Error("eta must be positive and finite");
+  for (std::size_t a = 0; a < cells_.size(); ++a) weight_[a] = grid_weight[std::size_t(cells_[a])];
+  eta_ = eta;
+}
+
+std::vector<double> LogLinearEnergy::LogModulus(const Eigen::VectorXd& x) const {
+  CheckX(x);
+  const std::int64_t m = std::int64_t(cells_.size());
+  const int r = root_count();
+  std::vector<double> coeff(r);
+  for (int j = 0; j < nt_; ++j) coeff[j] = x[1] * x[3 + j];
+  for (int j = nt_; j < r; ++j) coeff[j] = -x[2] * x[3 + j];
+  std::vector<double> L(std::size_t(total_cells_), std::numeric_limits<double>::quiet_NaN());
+#pragma omp parallel if (m > kEnergyBlock)
+  {
+    std::vector<double> buffer(r);
+#pragma omp for schedule(static)
+    for (std::int64_t a = 0; a < m; ++a) {
+      const double* row = buffer.data();
+      if (storage_ == Storage::kDouble) row = d_double_.data() + std::size_t(a) * r;
+      else if (storage_ == Storage::kFloat)
+        for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
+      else Row(a, buffer.data());
+      double s = 0;
+      for (int j = 0; j < r; ++j) s += coeff[j] * row[j];
+      L[std::size_t(cells_[a])] = x[0] + s;
+    }
+  }
+  return L;
+}
+
 void LogLinearEnergy::BeginVariablePass(const Eigen::VectorXd& x) {
   CheckX(x);
   const std::int64_t m = std::int64_t(cells_.size());
@@ -108,7 +142,7 @@ void LogLinearEnergy::BeginVariablePass(const Eigen::VectorXd& x) {
   s_top_.assign(std::size_t(m), 0.0);
   s_bottom_.assign(std::size_t(m), 0.0);
   const double* e = x.data() + 3;
-#pragma omp parallel
+#pragma omp parallel if (m > kEnergyBlock)
   {
     std::vector<double> buffer(r);
 #pragma omp for schedule(static)
@@ -147,7 +181,8 @@ Evaluation<double> LogLinearEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMod
   const std::int64_t nblocks = (m + kEnergyBlock - 1) / kEnergyBlock;
   std::vector<double> partial(std::size_t(nblocks * nb_vals), 0.0);
 
-#pragma omp parallel
+  // One block needs no threads (and a busy machine makes waking them costly).
+#pragma omp parallel if (nblocks > 1)
   {
     std::vector<double> buffer(r);
 #pragma omp for schedule(dynamic, 1)

@@ -45,6 +45,12 @@ class LogLinearEnergy {
   // Fixes the exponents T and B of x for the following kVariable evaluations: O(cells x roots).
   void BeginVariablePass(const Eigen::VectorXd& x);
 
+  // Replaces the weights (one per grid cell, as EnergyGrid::weight) and eta, e.g. for the
+  // reweighted pass; D is kept.
+  void SetWeights(const std::vector<double>& grid_weight, double eta);
+  // L = log|R(q_c)| at x for every grid cell (singular cells: NaN).
+  std::vector<double> LogModulus(const Eigen::VectorXd& x) const;
+
   LogLinearOptions::Storage storage() const { return storage_; }
   std::size_t matrix_bytes() const;
   double setup_seconds() const { return setup_seconds_; }

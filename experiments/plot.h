@@ -1,0 +1,44 @@
+// `quijibo plot`: convergence plots of optimizer logs (log.jsonl), like Fig. 11 of the QUIJIBO
+// paper (Kim 2015): normalized energy (psi + 1) / 2 on a log axis against the optimization step,
+// the relative energy (current level's grid and weights) as a line, the absolute energy (finest
+// grid, original weights) as dashed line with points, and pass starts as dashed vertical lines
+// labelled "<level> <pass>" ("25 V", "50 F", ...). Drawn by gnuplot into PREFIX.png and PREFIX.svg.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace quijibo::cli {
+
+void AddPlotCommand(CLI::App& app);
+
+// What a plot needs from one optimizer log.
+struct ConvergenceLog {
+  struct Point {
+    long long step;
+    double energy;  // psi in [-1, 1]
+  };
+  struct PassMark {
+    long long step;
+    std::string label;  // "25 V": level and pass, as far as the log names them
+  };
+  std::string path;
+  nlohmann::json run;  // the "run" header line, or null
+  // Relative energies of "iteration" lines, one segment per pass (a pass starts at a
+  // "pass_start" line or where level/pass of the iteration lines change).
+  std::vector<std::vector<Point>> relative;
+  // Absolute energies: "absolute" lines, plus "absolute_energy" of "pass_end" lines at steps
+  // no "absolute" line covers; sorted by step.
+  std::vector<Point> absolute;
+  std::vector<PassMark> passes;
+  bool truncated = false;  // the unparsable last line was skipped
+};
+
+// Reads a log.jsonl. Unknown line types and keys are ignored; an energy of null (NaN) is
+// skipped. An unparsable last line (a killed run) is skipped with a warning on stderr; any other
+// bad line throws quijibo::Error naming "<path>:<line>".
+ConvergenceLog ReadConvergenceLog(const std::string& path);
+
+}  // namespace quijibo::cli

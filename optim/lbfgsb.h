@@ -1,0 +1,166 @@
+// Bound-constrained L-BFGS (L-BFGS-B), templated on the scalar type, built from LBFGSpp's pieces
+// (Debian liblbfgspp-dev 0.1.0: BFGSMat, Cauchy point, subspace minimization, More-Thuente line
+// search). We drive the iteration ourselves rather than call LBFGSBSolver::minimize because the
+// optimizer needs what minimize does not give: a callback after every iteration (logs,
+// checkpoints, interruption), the reason it stopped, and a recovery from line-search failures
+// (LBFGSpp throws): as TAO's BLMVM in the reference code, the memory is reset and the step retried
+// once along the projected gradient; a second failure ends the pass.
+#pragma once
+
+#include "quijibo/real.h"
+
+// LBFGSpp's More-Thuente line search calls std::abs by qualified name; Boost's float128 only
+// provides abs by argument-dependent lookup. This overload (declared before LBFGSpp is included)
+// is what lets the optimizer run in float128.
+namespace std {
+inline quijibo::float128 abs(const quijibo::float128& x) { return boost::multiprecision::abs(x); }
+}  // namespace std
+
+#include <LBFGSB.h>
+
+#include <Eigen/Core>
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+namespace quijibo {
+
+enum class StopReason { kTolerance, kLineSearch, kMaxIterations, kInterrupted, kNonFinite };
+std::string StopReasonName(StopReason r);  // "tolerance", "line-search", ...
+
+template <class Scalar>
+struct LbfgsbOptions {
+  int memory = 5;              // correction pairs (reference: lm = 5)
+  int max_iterations = 2000;   // iteration cap (reference: 2000)
+  Scalar tolerance = Scalar(1e-5);  // on the infinity norm of the projected gradient
+  int max_linesearch = 30;     // evaluations per line search (reference: 30)
+};
+
+// After iteration `iteration` (1-based) with value f and projected gradient norm pg:
+enum class IterationAction { kContinue, kStop, kRestartMemory };
+
+template <class Scalar>
+struct LbfgsbResult {
+  StopReason stop = StopReason::kMaxIterations;
+  int iterations = 0;
+  int evaluations = 0;
+  Scalar f = 0;
+  Scalar projected_gradient = 0;
+  std::string message;  // the line search's complaint, if any
+};
+
+// Minimizes f over lb <= x <= ub starting from x (projected onto the box first).
+// f(x, grad) returns the value and writes the gradient. `first_iteration` lets a resumed pass
+// keep counting (the cap applies to the total).
+template <class Scalar, class Function>
+LbfgsbResult<Scalar> MinimizeBounded(
+    Function& f, Eigen::Matrix<Scalar, -1, 1>& x, const Eigen::Matrix<Scalar, -1, 1>& lb,
+    const Eigen::Matrix<Scalar, -1, 1>& ub, const LbfgsbOptions<Scalar>& options,
+    const std::function<IterationAction(int iteration, int evaluations, const Scalar& f, const Scalar& pg)>&
+        callback,
+    int first_iteration = 0) {
+  using Vector = Eigen::Matrix<Scalar, -1, 1>;
+  using std::isfinite;
+  const int n = int(x.size());
+  LBFGSpp::LBFGSBParam<Scalar> param;
+  param.m = options.memory;
+  param.max_linesearch = options.max_linesearch;
+  param.epsilon = options.tolerance;
+  param.epsilon_rel = Scalar(0);
+
+  LbfgsbResult<Scalar> result;
+  int evaluations = 0;
+  auto counted = [&](const Vector& y, Vector& g) {
+    ++evaluations;
+    return f(y, g);
+  };
+  auto project = [&](Vector& y) { y = y.cwiseMax(lb).cwiseMin(ub); };
+  auto projected_norm = [&](const Vector& y, const Vector& g) {
+    return ((y - g).cwiseMax(lb).cwiseMin(ub) - y).cwiseAbs().maxCoeff();
+  };
+  auto finite = [](const Scalar& v) { return v == v && v - v == Scalar(0); };
+  auto max_step = [&](const Vector& x0, const Vector& d) {
+    Scalar step = std::numeric_limits<Scalar>::infinity();
+    for (int i = 0; i < n; ++i) {
+      if (d[i] > Scalar(0)) step = std::min(step, Scalar((ub[i] - x0[i]) / d[i]));
+      else if (d[i] < Scalar(0)) step = std::min(step, Scalar((lb[i] - x0[i]) / d[i]));
+    }
+    return step;
+  };
+
+  project(x);
+  LBFGSpp::BFGSMat<Scalar, true> bfgs;
+  bfgs.reset(n, options.memory);
+  Vector grad(n), xp(n), gradp(n), drt(n), xcp(n), vecc, s(n), y(n);
+  std::vector<int> newact, fv;
+  Scalar fx = counted(x, grad);
+  Scalar pg = projected_norm(x, grad);
+  auto finish = [&](StopReason why) {
+    result.stop = why;
+    result.evaluations = evaluations;
+    result.f = fx;
+    result.projected_gradient = pg;
+    return result;
+  };
+  result.iterations = first_iteration;
+  if (!finite(fx) || !grad.allFinite()) return finish(StopReason::kNonFinite);
+  if (pg <= options.tolerance) return finish(StopReason::kTolerance);
+  if (first_iteration >= options.max_iterations) return finish(StopReason::kMaxIterations);
+
+  // The direction from the generalized Cauchy point and the subspace minimization.
+  auto direction = [&](bool first) {
+    LBFGSpp::Cauchy<Scalar>::get_cauchy_point(bfgs, x, grad, lb, ub, xcp, vecc, newact, fv);
+    if (first) {
+      drt = xcp - x;
+      drt.normalize();
+    } else {
+      LBFGSpp::SubspaceMin<Scalar>::subspace_minimize(bfgs, x, xcp, grad, lb, ub, vecc, newact, fv,
+                                                      param.max_submin, drt);
+    }
+  };
+  direction(true);
+  const Scalar eps = std::numeric_limits<Scalar>::epsilon();
+  bool retried = false;
+  for (;;) {
+    xp = x;
+    gradp = grad;
+    const Scalar fp = fx;
+    Scalar step_max = std::min(param.max_step, max_step(x, drt));
+    Scalar step = std::min(Scalar(1), step_max);
+    try {
+      LBFGSpp::LineSearchMoreThuente<Scalar>::LineSearch(counted, fx, x, grad, step, step_max, drt, xp, param);
+    } catch (const std::exception& e) {
+      // LBFGSpp throws when the line search fails; restore the point and retry once from scratch.
+      x = xp;
+      grad = gradp;
+      fx = fp;
+      result.message = e.what();
+      if (retried) return finish(StopReason::kLineSearch);
+      retried = true;
+      bfgs.reset(n, options.memory);
+      direction(true);
+      continue;
+    }
+    retried = false;
+    ++result.iterations;
+    pg = projected_norm(x, grad);
+    if (!finite(fx) || !grad.allFinite()) return finish(StopReason::kNonFinite);
+    const IterationAction action = callback(result.iterations, evaluations, fx, pg);
+    if (action == IterationAction::kStop) return finish(StopReason::kInterrupted);
+    if (pg <= options.tolerance) return finish(StopReason::kTolerance);
+    if (result.iterations >= options.max_iterations) return finish(StopReason::kMaxIterations);
+    s = x - xp;
+    y = grad - gradp;
+    bool fresh = false;
+    if (action == IterationAction::kRestartMemory) {
+      bfgs.reset(n, options.memory);
+      fresh = true;
+    } else if (s.dot(y) > eps * y.squaredNorm()) {
+      bfgs.add_correction(s, y);
+    }
+    project(x);
+    direction(fresh);
+  }
+}
+
+}  // namespace quijibo

@@ -1,0 +1,454 @@
+#include "optim/optimizer.h"
+
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "optim/lbfgsb.h"
+#include "optim/reweight.h"
+#include "quijibo/cached_energy.h"
+#include "quijibo/error.h"
+#include "quijibo/io.h"
+#include "quijibo/json_reader.h"
+#include "quijibo/progress.h"
+
+namespace quijibo {
+
+using nlohmann::json;
+
+std::string StopReasonName(StopReason r) {
+  switch (r) {
+    case StopReason::kTolerance: return "tolerance";
+    case StopReason::kLineSearch: return "line-search";
+    case StopReason::kMaxIterations: return "max-iterations";
+    case StopReason::kInterrupted: return "interrupted";
+    case StopReason::kNonFinite: return "non-finite";
+  }
+  return "?";
+}
+
+std::string OptimizeOptions::validate() const {
+  if (auto why = schedule.validate(); !why.empty()) return why;
+  if (evaluator != "loglinear" && evaluator != "cached") return "evaluator must be loglinear or cached";
+  if (evaluator == "loglinear" && precision != Precision::kDouble)
+    return "the loglinear evaluator runs in double only";
+  if (backend != "lbfgspp") return "unknown back end \"" + backend + "\" (available: lbfgspp)";
+  if (memory < 1 || memory > 100) return "memory must be in [1, 100]";
+  if (absolute_every < 1) return "absolute_every must be >= 1";
+  if (checkpoint_every < 1) return "checkpoint_every must be >= 1";
+  if (out_dir.empty()) return "an output folder is required";
+  if (auto why = energy.validate(); !why.empty()) return why;
+  return {};
+}
+
+json PassSummary::ToJson() const {
+  return {{"level", level}, {"level_index", level_index}, {"pass_index", pass_index},
+          {"pass", std::string(1, kind)}, {"stop", stop}, {"iterations", iterations},
+          {"evaluations", evaluations}, {"seconds", seconds}, {"energy_start", energy_start},
+          {"energy_end", energy_end}, {"absolute_end", absolute_end},
+          {"overflowed_cells", overflowed_cells}, {"message", message}};
+}
+
+PassSummary PassSummary::FromJson(const json& j) {
+  PassSummary p;
+  p.level = j.at("level");
+  p.level_index = j.at("level_index");
+  p.pass_index = j.at("pass_index");
+  p.kind = j.at("pass").get<std::string>()[0];
+  p.stop = j.at("stop");
+  p.iterations = j.at("iterations");
+  p.evaluations = j.at("evaluations");
+  p.seconds = j.at("seconds");
+  p.energy_start = j.at("energy_start");
+  p.energy_end = j.at("energy_end");
+  p.absolute_end = j.at("absolute_end");
+  p.overflowed_cells = j.at("overflowed_cells");
+  p.message = j.value("message", "");
+  return p;
+}
+
+json OptimizeSummary::ToJson(const OptimizeOptions& o) const {
+  json passes = json::array();
+  for (const PassSummary& p : this->passes) passes.push_back(p.ToJson());
+  return {{"schedule", o.schedule.ToJson()}, {"evaluator", o.evaluator},
+          {"precision", PrecisionName(o.precision)}, {"backend", o.backend},
+          {"weights", WeightFieldName(o.weights)},
+          {"level_weights", o.level_weights == LevelWeights::kSampleFinest ? "sample" : "recompute"},
+          {"alpha", o.energy.alpha}, {"memory", o.memory}, {"complete", complete},
+          {"seconds", seconds}, {"absolute_start", absolute_start}, {"absolute_end", absolute_end},
+          {"passes", passes}};
+}
+
+std::string OptimizeSummary::Report() const {
+  std::ostringstream s;
+  char line[256];
+  s << "level pass  stop            iters  evals   seconds   energy start -> end      absolute\n";
+  for (const PassSummary& p : passes) {
+    std::snprintf(line, sizeof line, "%5d  %c    %-14s %6d %6d %9.2f   %+.6f -> %+.6f   %+.6f\n", p.level,
+                  p.kind, p.stop.c_str(), p.iterations, p.evaluations, p.seconds, p.energy_start,
+                  p.energy_end, p.absolute_end);
+    s << line;
+  }
+  std::snprintf(line, sizeof line, "total %.1f s; absolute energy %+.6f -> %+.6f%s\n", seconds, absolute_start,
+                absolute_end, complete ? "" : " (interrupted)");
+  s << line;
+  return s.str();
+}
+
+namespace {
+
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void OnSignal(int) { g_interrupted = 1; }
+
+// Installs the SIGINT/SIGTERM handlers for the life of the optimization.
+class SignalGuard {
+ public:
+  SignalGuard() {
+    g_interrupted = 0;
+    struct sigaction sa {};
+    sa.sa_handler = OnSignal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~SignalGuard() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+template <class Scalar>
+std::string Exact(const Scalar& x) {
+  std::ostringstream s;
+  s.precision(std::numeric_limits<Scalar>::max_digits10);
+  s << x;
+  return s.str();
+}
+
+template <class Scalar>
+Scalar ParseScalar(const std::string& s) {
+  if constexpr (std::is_same_v<Scalar, float128>) return float128(s);
+  else if constexpr (std::is_same_v<Scalar, long double>) return std::strtold(s.c_str(), nullptr);
+  else if constexpr (std::is_same_v<Scalar, float>) return std::strtof(s.c_str(), nullptr);
+  else return std::strtod(s.c_str(), nullptr);
+}
+
+// The energy over all R + 3 variables, whichever evaluator computes it.
+template <class Scalar>
+class Objective {
+ public:
+  using Vector = Eigen::Matrix<Scalar, -1, 1>;
+  virtual ~Objective() = default;
+  virtual Evaluation<Scalar> Evaluate(const Vector& x, EnergyMode mode) = 0;
+  virtual void BeginVariablePass(const Vector& x) = 0;
+  virtual void SetWeights(const std::vector<double>& w, double eta) = 0;
+};
+
+class LogLinearObjective : public Objective<double> {
+ public:
+  explicit LogLinearObjective(LogLinearEnergy* e) : e_(e) {}
+  Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode) override { return e_->Evaluate(x, mode); }
+  void BeginVariablePass(const Eigen::VectorXd& x) override { e_->BeginVariablePass(x); }
+  void SetWeights(const std::vector<double>& w, double eta) override { e_->SetWeights(w, eta); }
+
+ private:
+  LogLinearEnergy* e_;
+};
+
+template <class Scalar>
+class CachedObjective : public Objective<Scalar> {
+ public:
+  using Vector = Eigen::Matrix<Scalar, -1, 1>;
+  CachedObjective(const RationalMap& map, const EnergyGrid& grid, const EnergyOptions& o) : e_(map, grid, o) {}
+  Evaluation<Scalar> Evaluate(const Vector& x, EnergyMode mode) override { return e_.Evaluate(x, mode); }
+  void BeginVariablePass(const Vector&) override {}
+  void SetWeights(const std::vector<double>& w, double eta) override { e_.SetWeights(w, eta); }
+
+ private:
+  CachedEnergy<Scalar> e_;
+};
+
+struct Paths {
+  std::string dir, log, checkpoint, summary, map;
+};
+
+template <class Scalar>
+OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& o) {
+  using Vector = Eigen::Matrix<Scalar, -1, 1>;
+  const auto t0 = std::chrono::steady_clock::now();
+  namespace fs = std::filesystem;
+  Paths paths{o.out_dir, o.out_dir + "/log.jsonl", o.out_dir + "/checkpoint.json", o.out_dir + "/summary.json",
+              o.out_dir + "/map.json"};
+  std::error_code ec;
+  fs::create_directories(o.out_dir, ec);
+  if (ec) throw Error(o.out_dir + ": cannot create the output folder: " + ec.message());
+
+  const std::string fingerprint = o.schedule.notation() + "|" + o.evaluator + "|" + PrecisionName(o.precision) +
+                                  "|" + WeightFieldName(o.weights) + "|" + std::to_string(map.top_count()) + "/" +
+                                  std::to_string(map.bottom_count());
+  // State: where we are and x.
+  OptimizeSummary summary;
+  int start_level = 0, start_pass = 0, start_iteration = 0;
+  long long step = 0;
+  double elapsed_before = 0;
+  Vector x = map.variables().cast<Scalar>();
+  Vector pass_start_x;
+  if (o.resume) {
+    const std::string text = ReadFile(paths.checkpoint);
+    const json c = ParseJson(text, paths.checkpoint);
+    JsonReader r(c, paths.checkpoint);
+    if (r.string("/format") != "quijibo-checkpoint") r.fail("/format", "not a quijibo checkpoint");
+    if (r.string("/fingerprint") != fingerprint)
+      r.fail("/fingerprint", "the checkpoint was made by a different run (" + r.string("/fingerprint") +
+                                 "; this run is " + fingerprint + ")");
+    start_level = int(r.integer("/level_index"));
+    start_pass = int(r.integer("/pass_index"));
+    start_iteration = int(r.integer("/iteration"));
+    step = r.integer("/step");
+    elapsed_before = r.number("/elapsed_seconds");
+    summary.absolute_start = r.number("/absolute_start");
+    auto read_vec = [&](const char* key) {
+      const json& a = c.at(key);
+      Vector v(Eigen::Index(a.size()));
+      for (std::size_t k = 0; k < a.size(); ++k) v[Eigen::Index(k)] = ParseScalar<Scalar>(a[k].get<std::string>());
+      return v;
+    };
+    x = read_vec("x");
+    pass_start_x = read_vec("pass_start_x");
+    if (x.size() != map.variable_count()) r.fail("/x", "does not match the map's variable count");
+    for (const json& p : c.at("passes")) summary.passes.push_back(PassSummary::FromJson(p));
+    if (c.value("complete", false)) {
+      map.set_variables(x.template cast<double>());
+      summary.complete = true;
+      summary.seconds = elapsed_before;
+      summary.absolute_end = summary.passes.empty() ? summary.absolute_start : summary.passes.back().absolute_end;
+      return summary;
+    }
+    // Drop log lines written after the checkpoint: the resumed run writes them again.
+    const long long log_bytes = r.integer("/log_bytes");
+    if (fs::exists(paths.log) && std::int64_t(fs::file_size(paths.log)) > log_bytes)
+      fs::resize_file(paths.log, std::uintmax_t(log_bytes));
+  } else {
+    WriteFileAtomically(paths.log, "");
+  }
+  std::ofstream log(paths.log, std::ios::app);
+  if (!log) throw Error(paths.log + ": cannot write");
+  auto elapsed = [&] {
+    return elapsed_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  auto emit = [&](json line) {
+    line["seconds"] = elapsed();
+    log << line.dump() << "\n";
+    log.flush();
+    if (!log) throw Error(paths.log + ": cannot write (disk full?)");
+  };
+
+  // The finest grid with the original weights: the absolute energy and the reweighting.
+  const std::vector<double> finest_w = ComputeWeights(sdf, o.weights);
+  EnergyGrid finest = MakeEnergyGrid(sdf, finest_w, o.weights, 0, LevelWeights::kSampleFinest, 0.0);
+  LogLinearEnergy absolute(map, finest, o.energy, o.loglinear);
+  auto absolute_energy = [&](const Vector& xs) {
+    absolute.SetWeights(finest.weight, finest.eta);
+    return absolute.Evaluate(xs.template cast<double>(), EnergyMode::kFull, false).energy;
+  };
+  if (!o.resume) {
+    summary.absolute_start = absolute_energy(x);
+    emit({{"type", "run"}, {"schedule", o.schedule.notation()}, {"evaluator", o.evaluator},
+          {"precision", PrecisionName(o.precision)}, {"backend", o.backend}, {"weights", WeightFieldName(o.weights)},
+          {"roots", {{"top", map.top_count()}, {"bottom", map.bottom_count()}}}, {"step", 0},
+          {"absolute_energy", summary.absolute_start}});
+  }
+  const int finest_n = std::max({sdf.frame.dims[0], sdf.frame.dims[1], sdf.frame.dims[2]});
+
+  auto write_checkpoint = [&](int level_index, int pass_index, int iteration, const Vector& xs,
+                              const Vector& pass_start, bool complete) {
+    log.flush();
+    json c;
+    c["format"] = "quijibo-checkpoint";
+    c["version"] = 1;
+    c["fingerprint"] = fingerprint;
+    c["complete"] = complete;
+    c["level_index"] = level_index;
+    c["pass_index"] = pass_index;
+    c["iteration"] = iteration;
+    c["step"] = step;
+    c["log_bytes"] = (long long)fs::file_size(paths.log);
+    c["elapsed_seconds"] = elapsed();
+    c["absolute_start"] = summary.absolute_start;
+    json xv = json::array(), pv = json::array();
+    for (Eigen::Index k = 0; k < xs.size(); ++k) xv.push_back(Exact(xs[k]));
+    for (Eigen::Index k = 0; k < pass_start.size(); ++k) pv.push_back(Exact(pass_start[k]));
+    c["x"] = xv;
+    c["pass_start_x"] = pv;
+    json passes = json::array();
+    for (const PassSummary& p : summary.passes) passes.push_back(p.ToJson());
+    c["passes"] = passes;
+    WriteFileAtomically(paths.checkpoint, c.dump() + "\n");
+  };
+
+  SignalGuard signals;
+  bool interrupted = false;
+  for (int li = start_level; li < int(o.schedule.levels.size()) && !interrupted; ++li) {
+    const LevelSpec& level = o.schedule.levels[li];
+    const EnergyGrid grid = MakeEnergyGrid(sdf, finest_w, o.weights, level.resolution, o.level_weights, 0.0);
+    // At the finest level the log-linear evaluator shares the absolute one's matrix.
+    const bool share = o.evaluator == "loglinear" && grid.frame == finest.frame;
+    std::unique_ptr<LogLinearEnergy> level_energy;
+    std::unique_ptr<Objective<Scalar>> objective;
+    if constexpr (std::is_same_v<Scalar, double>) {
+      if (o.evaluator == "loglinear") {
+        if (!share) level_energy = std::make_unique<LogLinearEnergy>(map, grid, o.energy, o.loglinear);
+        objective = std::make_unique<LogLinearObjective>(share ? &absolute : level_energy.get());
+      }
+    }
+    if (!objective) objective = std::make_unique<CachedObjective<Scalar>>(map, grid, o.energy);
+
+    const int first_pass = li == start_level ? start_pass : 0;
+    for (int pj = first_pass; pj < int(level.passes.size()); ++pj) {
+      const PassSpec& spec = level.passes[pj];
+      const bool resumed_mid_pass = li == start_level && pj == start_pass && start_iteration > 0;
+      const int first_iteration = resumed_mid_pass ? start_iteration : 0;
+      if (!resumed_mid_pass) pass_start_x = x;
+      const auto pass_t0 = std::chrono::steady_clock::now();
+      const json where = {{"level", level.resolution}, {"level_index", li}, {"pass", std::string(1, char(spec.kind))},
+                          {"pass_index", pj}};
+      if (!resumed_mid_pass) {
+        json line = where;
+        line["type"] = "pass_start";
+        line["step"] = step;
+        emit(line);
+      }
+      // Weights of this pass.
+      objective->SetWeights(grid.weight, grid.eta);
+      if (spec.kind == PassKind::kReweighted) {
+        ReweightCounts counts;
+        const std::vector<double> rw =
+            ReweightedWeights(sdf, finest_w, absolute.LogModulus(pass_start_x.template cast<double>()), &counts);
+        const EnergyGrid rgrid = MakeEnergyGrid(sdf, rw, o.weights, level.resolution, LevelWeights::kSampleFinest, 0.0);
+        objective->SetWeights(rgrid.weight, rgrid.eta);
+      }
+      const bool variable = spec.kind == PassKind::kVariable;
+      const EnergyMode mode = variable ? EnergyMode::kVariable : EnergyMode::kFull;
+      if (variable) objective->BeginVariablePass(x);
+      const int na = variable ? 3 : int(x.size());
+      Vector xa = x.head(na);
+      Vector lb = Vector::Zero(na), ub = Vector::Constant(na, std::numeric_limits<Scalar>::infinity());
+      lb[0] = -std::numeric_limits<Scalar>::infinity();
+      PassSummary ps;
+      ps.level = level.resolution;
+      ps.level_index = li;
+      ps.pass_index = pj;
+      ps.kind = char(spec.kind);
+      bool first_eval = true;
+      Vector full = x;
+      auto f = [&](const Vector& y, Vector& g) -> Scalar {
+        full.head(na) = y;
+        const Evaluation<Scalar> ev = objective->Evaluate(full, mode);
+        g = ev.gradient.head(na);
+        ps.overflowed_cells = std::max<long long>(ps.overflowed_cells, ev.counts.overflowed);
+        if (first_eval) ps.energy_start = ToDouble(ev.energy), first_eval = false;
+        return ev.energy;
+      };
+      Progress progress("level " + std::to_string(level.resolution) + " pass " + std::string(1, char(spec.kind)),
+                        spec.max_iterations, false);
+      auto callback = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
+        ++step;
+        json line = where;
+        line["type"] = "iteration";
+        line["step"] = step;
+        line["iteration"] = it;
+        line["evaluations"] = evals;
+        line["energy"] = ToDouble(fx);
+        line["projected_gradient"] = ToDouble(pg);
+        emit(line);
+        progress.update(it, "psi " + std::to_string(ToDouble(fx)));
+        if (it % o.absolute_every == 0) {
+          Vector cur = x;
+          cur.head(na) = full.head(na);
+          json a = where;
+          a["type"] = "absolute";
+          a["step"] = step;
+          a["iteration"] = it;
+          a["energy"] = absolute_energy(cur);
+          emit(a);
+          if (spec.kind == PassKind::kReweighted || !share) {}  // absolute_energy swaps weights back below
+          if (share) objective->SetWeights(grid.weight, grid.eta);
+          if (share && spec.kind == PassKind::kReweighted) {
+            // restore this pass's reweighted field on the shared evaluator
+            const std::vector<double> rw =
+                ReweightedWeights(sdf, finest_w, absolute.LogModulus(pass_start_x.template cast<double>()));
+            const EnergyGrid rgrid = MakeEnergyGrid(sdf, rw, o.weights, level.resolution, LevelWeights::kSampleFinest, 0.0);
+            objective->SetWeights(rgrid.weight, rgrid.eta);
+          }
+        }
+        if (g_interrupted) {
+          Vector cur = x;
+          cur.head(na) = full.head(na);
+          write_checkpoint(li, pj, it, cur, pass_start_x, false);
+          return IterationAction::kStop;
+        }
+        if (it % o.checkpoint_every == 0) {
+          Vector cur = x;
+          cur.head(na) = full.head(na);
+          write_checkpoint(li, pj, it, cur, pass_start_x, false);
+          return IterationAction::kRestartMemory;
+        }
+        return IterationAction::kContinue;
+      };
+      LbfgsbOptions<Scalar> lo;
+      lo.memory = o.memory;
+      lo.max_iterations = spec.max_iterations;
+      lo.tolerance = Scalar(spec.tolerance);
+      const LbfgsbResult<Scalar> res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, callback, first_iteration);
+      progress.finish();
+      x.head(na) = xa;
+      if (res.stop == StopReason::kInterrupted) {
+        interrupted = true;
+        break;
+      }
+      ps.stop = StopReasonName(res.stop);
+      ps.message = res.message;
+      ps.iterations = res.iterations;
+      ps.evaluations = res.evaluations;
+      ps.energy_end = ToDouble(res.f);
+      ps.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_t0).count();
+      ps.absolute_end = absolute_energy(x);
+      summary.passes.push_back(ps);
+      json line = ps.ToJson();
+      line["type"] = "pass_end";
+      line["step"] = step;
+      emit(line);
+      const bool last = li + 1 == int(o.schedule.levels.size()) && pj + 1 == int(level.passes.size());
+      const bool next_level = pj + 1 == int(level.passes.size());
+      write_checkpoint(next_level ? li + 1 : li, next_level ? 0 : pj + 1, 0, x, x, last);
+    }
+    if (!interrupted) {
+      RationalMap level_map = map;
+      level_map.set_variables(x.template cast<double>());
+      WriteMap(o.out_dir + "/map_level_" + std::to_string(level.resolution) + ".json", level_map);
+    }
+    (void)finest_n;
+  }
+  map.set_variables(x.template cast<double>());
+  summary.complete = !interrupted;
+  summary.seconds = elapsed();
+  summary.absolute_end = absolute_energy(x);
+  WriteFileAtomically(paths.summary, summary.ToJson(o).dump(1) + "\n");
+  return summary;
+}
+
+}  // namespace
+
+OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options) {
+  if (auto why = options.validate(); !why.empty()) throw Error("optimize: " + why);
+  if (auto why = map.validate(); !why.empty()) throw Error("optimize: map: " + why);
+  return DispatchPrecision(options.precision, [&]<class Real>() { return Run<Real>(sdf, map, options); });
+}
+
+}  // namespace quijibo

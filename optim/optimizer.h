@@ -1,0 +1,73 @@
+// The QUIJIBO optimization (2015 paper §4.5, §5.1): a schedule of levels and passes run with
+// bound-constrained L-BFGS, with a JSON-lines log, a summary, atomic checkpoints and resumption.
+//
+// Files written to `out_dir`:
+//   log.jsonl          one line per iteration (relative energy: the current level and weights),
+//                      "absolute" lines every `absolute_every` iterations and at pass ends (psi on
+//                      the finest grid with the original weights, always by the exact log-linear
+//                      evaluator so curves of all precisions compare), pass start/end lines
+//   checkpoint.json    every `checkpoint_every` iterations, at pass ends and on SIGINT/SIGTERM
+//   map_level_<N>.json the map after each level;  map.json  the final map
+//   summary.json       each pass's stop reason, iterations, evaluations, time and energies
+//
+// Resumption is exact for checkpoints taken during a run: at every checkpoint the L-BFGS memory
+// restarts (in the uninterrupted run too), so the state in the file determines the rest of the
+// run. A SIGINT/SIGTERM checkpoint restarts the memory at that iteration, which an uninterrupted
+// run would not have done: resuming it continues correctly but not bit for bit.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "optim/schedule.h"
+#include "quijibo/energy.h"
+#include "quijibo/loglinear_energy.h"
+#include "quijibo/real.h"
+
+namespace quijibo {
+
+struct OptimizeOptions {
+  Schedule schedule;
+  std::string evaluator = "loglinear";  // "loglinear" (double) or "cached" (any precision)
+  Precision precision = Precision::kDouble;
+  std::string backend = "lbfgspp";      // bound-constrained L-BFGS (the only back end so far)
+  WeightField weights = WeightField::kLayer;
+  LevelWeights level_weights = LevelWeights::kSampleFinest;
+  EnergyOptions energy;
+  LogLinearOptions loglinear;
+  int memory = 5;              // L-BFGS correction pairs (reference: 5)
+  int absolute_every = 10;     // iterations between absolute-energy log lines
+  int checkpoint_every = 25;   // iterations between checkpoints (and L-BFGS memory restarts)
+  std::string out_dir;         // required
+  bool resume = false;         // continue from out_dir/checkpoint.json
+  std::string validate() const;
+};
+
+struct PassSummary {
+  int level = 0, level_index = 0, pass_index = 0;
+  char kind = 'F';
+  std::string stop;
+  int iterations = 0, evaluations = 0;
+  double seconds = 0, energy_start = 0, energy_end = 0, absolute_end = 0;
+  long long overflowed_cells = 0;  // largest count seen in one evaluation (cached evaluator)
+  std::string message;
+  nlohmann::json ToJson() const;
+  static PassSummary FromJson(const nlohmann::json& j);
+};
+
+struct OptimizeSummary {
+  std::vector<PassSummary> passes;
+  double seconds = 0;
+  double absolute_start = 0, absolute_end = 0;
+  bool complete = false;     // false when interrupted
+  nlohmann::json ToJson(const OptimizeOptions& options) const;
+  std::string Report() const;  // a readable table
+};
+
+// Runs the schedule from `map` (its exponents, ln C, tau, beta are the start; its roots stay) on
+// the target `sdf`; `map` holds the result on return. Throws quijibo::Error on bad input. When a
+// SIGINT/SIGTERM arrives, writes a checkpoint and returns with complete = false.
+OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options);
+
+}  // namespace quijibo

@@ -1,0 +1,280 @@
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fcntl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <sstream>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "optim/lbfgsb.h"
+#include "optim/optimizer.h"
+#include "optim/reweight.h"
+#include "optim/schedule.h"
+#include "quijibo/error.h"
+#include "quijibo/json_reader.h"
+
+extern char** environ;
+
+namespace quijibo {
+namespace {
+
+TEST(ScheduleTest, ParsesThePapersNotation) {
+  const Schedule s = Schedule::Parse("25(VFRF)50(VFRF)97(VF)");
+  ASSERT_EQ(s.levels.size(), 3u);
+  EXPECT_EQ(s.levels[0].resolution, 25);
+  EXPECT_EQ(s.levels[2].passes.size(), 2u);
+  EXPECT_EQ(s.levels[0].passes[2].kind, PassKind::kReweighted);
+  EXPECT_EQ(s.notation(), "25(VFRF)50(VFRF)97(VF)");
+  EXPECT_EQ(Schedule::Parse(" 25 ( v f ) ").notation(), "25(VF)");
+  for (const char* bad : {"", "25", "25()", "25(VX)", "(VF)", "25(VF", "0(V)", "99999(V)"})
+    EXPECT_THROW(Schedule::Parse(bad), Error) << bad;
+}
+
+TEST(ScheduleTest, JsonFormWithPerPassCaps) {
+  const nlohmann::json j = nlohmann::json::parse(R"({
+    "defaults": {"F": {"max_iterations": 300}},
+    "levels": [{"resolution": 25, "passes": "VF"},
+               {"resolution": 50, "passes": [{"kind": "V", "max_iterations": 7, "tolerance": 1e-7}, {"kind": "R"}]}]})");
+  const Schedule s = Schedule::FromJson(JsonReader(j, "exp.json"), "");
+  EXPECT_EQ(s.notation(), "25(VF)50(VR)");
+  EXPECT_EQ(s.levels[0].passes[1].max_iterations, 300);
+  EXPECT_EQ(s.levels[1].passes[0].max_iterations, 7);
+  EXPECT_DOUBLE_EQ(s.levels[1].passes[0].tolerance, 1e-7);
+  const nlohmann::json bad = nlohmann::json::parse(R"({"levels": [{"resolution": 25, "passes": [{"kind": "Q"}]}]})");
+  try {
+    Schedule::FromJson(JsonReader(bad, "exp.json"), "");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("exp.json: /levels/0/passes/0/kind"), std::string::npos) << e.what();
+  }
+  const nlohmann::json empty = nlohmann::json::parse(R"({"levels": []})");
+  EXPECT_THROW(Schedule::FromJson(JsonReader(empty, "e.json"), ""), Error);
+}
+
+template <class Scalar>
+class LbfgsbTest : public ::testing::Test {};
+using Scalars = ::testing::Types<double, long double, float128>;
+TYPED_TEST_SUITE(LbfgsbTest, Scalars);
+
+// Bounded Rosenbrock: the minimum (1, 1) is cut off by x0 <= 0.5, so the solution sits on the
+// bound at (0.5, 0.25).
+TYPED_TEST(LbfgsbTest, SolvesABoundedRosenbrock) {
+  using Scalar = TypeParam;
+  using V = Eigen::Matrix<Scalar, -1, 1>;
+  auto f = [](const V& x, V& g) {
+    const Scalar a = Scalar(1) - x[0], b = x[1] - x[0] * x[0];
+    g.resize(2);
+    g[0] = Scalar(-2) * a - Scalar(400) * x[0] * b;
+    g[1] = Scalar(200) * b;
+    return a * a + Scalar(100) * b * b;
+  };
+  V x(2), lb(2), ub(2);
+  x << Scalar(-1.2), Scalar(1);
+  lb << Scalar(-2), Scalar(-2);
+  ub << Scalar(0.5), Scalar(2);
+  LbfgsbOptions<Scalar> o;
+  o.tolerance = Scalar(1e-9);
+  int calls = 0;
+  const auto r = MinimizeBounded<Scalar>(f, x, lb, ub, o, [&](int, int, const Scalar&, const Scalar&) {
+    ++calls;
+    return IterationAction::kContinue;
+  });
+  EXPECT_EQ(r.stop, StopReason::kTolerance) << r.message;
+  EXPECT_NEAR(ToDouble(x[0]), 0.5, 1e-8);
+  EXPECT_NEAR(ToDouble(x[1]), 0.25, 1e-7);
+  EXPECT_EQ(calls, r.iterations);
+  // An iteration cap stops it and says so.
+  x << Scalar(-1.2), Scalar(1);
+  o.max_iterations = 3;
+  EXPECT_EQ((MinimizeBounded<Scalar>(f, x, lb, ub, o, [](int, int, const Scalar&, const Scalar&) {
+              return IterationAction::kContinue;
+            }).stop),
+            StopReason::kMaxIterations);
+}
+
+TEST(ReweightTest, TotalsFollowTheReferenceRule) {
+  ScalarGrid sdf = AnalyticTarget("sphere", GridFrame::Cube(16, {0, 0, 0}, 3.0));
+  const std::vector<double> w = ComputeWeights(sdf, WeightField::kLayer);
+  std::vector<double> L(w.size());
+  for (std::size_t c = 0; c < L.size(); ++c) L[c] = sdf.frame.cell_center(std::int64_t(c))[0] > 0 ? -1.0 : 1.0;
+  ReweightCounts n;
+  const std::vector<double> rw = ReweightedWeights(sdf, w, L, &n);
+  double out = 0, poor = 0, well = 0;
+  for (std::size_t c = 0; c < rw.size(); ++c) {
+    if (sdf.values[c] >= 0) out += rw[c];
+    else (L[c] >= 0 ? poor : well) += rw[c];
+  }
+  EXPECT_NEAR(out, 0.5, 1e-12);
+  EXPECT_NEAR(poor, -0.25, 1e-12);
+  EXPECT_NEAR(well, -0.25, 1e-12);
+  EXPECT_GT(n.poorly_captured, 0);
+  EXPECT_GT(n.well_captured, 0);
+}
+
+struct SmallRun {
+  ScalarGrid sdf;
+  RationalMap map;
+  SmallRun() {
+    sdf = AnalyticTarget("torus", GridFrame::Cube(20, {0, 0, 0}, 3.0));
+    RandomMapOptions o;
+    o.top = 12;
+    o.bottom = 9;
+    o.seed = 3;
+    map = RandomMap(o);
+    map.ln_C = -MedianLogModulus(map, MakeEnergyGrid(sdf, WeightField::kLayer));
+  }
+};
+
+std::string TempDir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / ("quijibo_optim_" + name);
+  std::filesystem::remove_all(d);
+  return d.string();
+}
+
+TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {
+  SmallRun run;
+  OptimizeOptions o;
+  o.schedule = Schedule::Parse("10(VFRF)20(VF)");
+  for (auto& l : o.schedule.levels)
+    for (auto& p : l.passes) p.max_iterations = 40;
+  o.out_dir = TempDir("schedule");
+  const double before = LogLinearEnergy(run.map, MakeEnergyGrid(run.sdf, WeightField::kLayer))
+                            .Evaluate(run.map.variables(), EnergyMode::kFull, false)
+                            .energy;
+  const OptimizeSummary s = Optimize(run.sdf, run.map, o);
+  ASSERT_TRUE(s.complete);
+  ASSERT_EQ(s.passes.size(), 6u);
+  EXPECT_NEAR(s.absolute_start, before, 1e-12);
+  EXPECT_LT(s.absolute_end, before - 0.05);
+  for (const PassSummary& p : s.passes) {
+    EXPECT_LE(p.iterations, 40);
+    EXPECT_TRUE(p.stop == "tolerance" || p.stop == "max-iterations" || p.stop == "line-search") << p.stop;
+    if (p.kind != 'R') {
+      EXPECT_LE(p.energy_end, p.energy_start + 1e-12);
+    }
+  }
+  // Every exponent stays >= 0.
+  for (double e : run.map.top_exponents) EXPECT_GE(e, 0.0);
+  EXPECT_GE(run.map.tau, 0.0);
+  // One log line per iteration, plus pass and absolute lines.
+  std::ifstream log(o.out_dir + "/log.jsonl");
+  int iterations = 0;
+  for (std::string line; std::getline(log, line);)
+    if (nlohmann::json::parse(line)["type"] == "iteration") ++iterations;
+  int total = 0;
+  for (const PassSummary& p : s.passes) total += p.iterations;
+  EXPECT_EQ(iterations, total);
+  EXPECT_TRUE(std::filesystem::exists(o.out_dir + "/summary.json"));
+  EXPECT_TRUE(std::filesystem::exists(o.out_dir + "/map_level_20.json"));
+  std::filesystem::remove_all(o.out_dir);
+}
+
+TEST(OptimizerTest, RunsEndToEndInLongDoubleWithTheCachedEvaluator) {
+  SmallRun run;
+  OptimizeOptions o;
+  o.schedule = Schedule::Parse("8(VF)");
+  for (auto& p : o.schedule.levels[0].passes) p.max_iterations = 10;
+  o.evaluator = "cached";
+  o.precision = Precision::kLongDouble;
+  o.out_dir = TempDir("longdouble");
+  const OptimizeSummary s = Optimize(run.sdf, run.map, o);
+  EXPECT_TRUE(s.complete);
+  EXPECT_LT(s.absolute_end, s.absolute_start);
+  std::filesystem::remove_all(o.out_dir);
+}
+
+// The command, killed with SIGKILL mid-run and resumed, ends where an uninterrupted run ends.
+std::string Slurp(const std::string& p) {
+  std::ifstream in(p);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+int RunQuijibo(const std::vector<std::string>& args, pid_t* background = nullptr) {
+  std::vector<std::string> all = {QUIJIBO_BINARY, "--quiet"};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  pid_t pid;
+  posix_spawn(&pid, QUIJIBO_BINARY, &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (background) {
+    *background = pid;
+    return 0;
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(OptimizerTest, KilledAndResumedRunMatchesAnUninterruptedOne) {
+  const std::string dir = TempDir("kill");
+  std::filesystem::create_directories(dir);
+  const std::string map = dir + "/init.json";
+  ASSERT_EQ(RunQuijibo({"map", "random", "--top", "40", "--bottom", "30", "--seed", "5", "--center-on", "torus",
+                        "--target-resolution", "24", "-o", map}),
+            0);
+  const std::vector<std::string> common = {"optimize", "-t", "torus", "--target-resolution", "24", "-m", map,
+                                           "-s", "12(VF)24(VRF)", "--max-f", "60", "--max-r", "30",
+                                           "--checkpoint-every", "7"};
+  auto with_out = [&](const std::string& out, bool resume) {
+    auto a = common;
+    a.push_back("-o");
+    a.push_back(out);
+    if (resume) a.push_back("--resume");
+    return a;
+  };
+  ASSERT_EQ(RunQuijibo(with_out(dir + "/whole", false)), 0);
+
+  pid_t pid;
+  RunQuijibo(with_out(dir + "/killed", false), &pid);
+  // Kill once the run is well into its passes (the log grows by one line per iteration).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  bool killed = false;
+  while (std::chrono::steady_clock::now() < deadline) {
+    int status;
+    if (waitpid(pid, &status, WNOHANG) == pid) break;  // finished before we could kill it
+    const std::string log = Slurp(dir + "/killed/log.jsonl");
+    if (std::count(log.begin(), log.end(), '\n') > 90) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      killed = true;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_TRUE(killed) << "the run finished before it could be killed: the test proves less";
+  ASSERT_EQ(RunQuijibo(with_out(dir + "/killed", true)), 0);
+  const auto whole = nlohmann::json::parse(Slurp(dir + "/whole/map.json"));
+  const auto resumed = nlohmann::json::parse(Slurp(dir + "/killed/map.json"));
+  EXPECT_EQ(whole["top"], resumed["top"]);
+  EXPECT_EQ(whole["bottom"], resumed["bottom"]);
+  EXPECT_EQ(whole["ln_C"], resumed["ln_C"]);
+  EXPECT_EQ(whole["tau"], resumed["tau"]);
+  EXPECT_EQ(whole["beta"], resumed["beta"]);
+  // The resumed log has the same iterations, none twice.
+  auto iterations = [](const std::string& text) {
+    std::vector<std::pair<long long, double>> v;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+      const auto j = nlohmann::json::parse(line);
+      if (j["type"] == "iteration") v.emplace_back(j["step"].get<long long>(), j["energy"].get<double>());
+    }
+    return v;
+  };
+  EXPECT_EQ(iterations(Slurp(dir + "/whole/log.jsonl")), iterations(Slurp(dir + "/killed/log.jsonl")));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace quijibo
