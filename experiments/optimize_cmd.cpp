@@ -41,7 +41,9 @@ void AddOptimizeCommand(CLI::App& app) {
   c->add_option("-p,--precision", a->precision, "float, double, long-double, float128 (cached)")
       ->capture_default_str()
       ->check(CLI::IsMember({"float", "double", "long-double", "float128"}));
-  c->add_option("--backend", a->backend, "Optimizer back end")->capture_default_str()->check(CLI::IsMember({"lbfgspp"}));
+  c->add_option("--backend", a->backend, "lbfgspp (bound-constrained L-BFGS-B) or ceres (L-BFGS on x = y^2)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"lbfgspp", "ceres"}));
   c->add_option("-w,--weights", a->weights, "layer or inverse")->capture_default_str()
       ->check(CLI::IsMember({"layer", "inverse"}));
   c->add_option("--level-weights", a->level_weights, "sample or recompute")->capture_default_str()

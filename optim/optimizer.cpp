@@ -7,6 +7,7 @@
 #include <memory>
 #include <sstream>
 
+#include "optim/ceres_backend.h"
 #include "optim/lbfgsb.h"
 #include "optim/reweight.h"
 #include "quijibo/cached_energy.h"
@@ -35,7 +36,9 @@ std::string OptimizeOptions::validate() const {
   if (evaluator != "loglinear" && evaluator != "cached") return "evaluator must be loglinear or cached";
   if (evaluator == "loglinear" && precision != Precision::kDouble)
     return "the loglinear evaluator runs in double only";
-  if (backend != "lbfgspp") return "unknown back end \"" + backend + "\" (available: lbfgspp)";
+  if (backend != "lbfgspp" && backend != "ceres")
+    return "unknown back end \"" + backend + "\" (available: lbfgspp, ceres)";
+  if (backend == "ceres" && precision != Precision::kDouble) return "the ceres back end runs in double only";
   if (memory < 1 || memory > 100) return "memory must be in [1, 100]";
   if (absolute_every < 1) return "absolute_every must be >= 1";
   if (checkpoint_every < 1) return "checkpoint_every must be >= 1";
@@ -405,7 +408,15 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       lo.memory = o.memory;
       lo.max_iterations = spec.max_iterations;
       lo.tolerance = Scalar(spec.tolerance);
-      const LbfgsbResult<Scalar> res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, callback, first_iteration);
+      LbfgsbResult<Scalar> res;
+      if constexpr (std::is_same_v<Scalar, double>) {
+        if (o.backend == "ceres")
+          res = MinimizeCeres(f, xa, lb, lo, callback, first_iteration);
+        else
+          res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, callback, first_iteration);
+      } else {
+        res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, callback, first_iteration);
+      }
       progress.finish();
       x.head(na) = xa;
       if (res.stop == StopReason::kInterrupted) {

@@ -31,7 +31,7 @@ struct OptimizeOptions {
   Schedule schedule;
   std::string evaluator = "loglinear";  // "loglinear" (double) or "cached" (any precision)
   Precision precision = Precision::kDouble;
-  std::string backend = "lbfgspp";      // bound-constrained L-BFGS (the only back end so far)
+  std::string backend = "lbfgspp";      // "lbfgspp" (L-BFGS-B) or "ceres" (L-BFGS on x = y^2)
   WeightField weights = WeightField::kLayer;
   LevelWeights level_weights = LevelWeights::kSampleFinest;
   EnergyOptions energy;

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <thread>
 
+#include "optim/ceres_backend.h"
 #include "optim/lbfgsb.h"
 #include "optim/optimizer.h"
 #include "optim/reweight.h"
@@ -97,6 +98,31 @@ TYPED_TEST(LbfgsbTest, SolvesABoundedRosenbrock) {
               return IterationAction::kContinue;
             }).stop),
             StopReason::kMaxIterations);
+}
+
+// The Ceres back end keeps x >= 0 by x = y^2 and reaches the bound only asymptotically.
+TEST(CeresBackendTest, SolvesABoundedQuadraticThroughTheReparameterization) {
+  auto f = [](const Eigen::VectorXd& x, Eigen::VectorXd& g) {
+    g.resize(3);
+    g << 2 * (x[0] + 1), 2 * (x[1] - 2), 2 * (x[2] - 0.5);
+    return (x[0] + 1) * (x[0] + 1) + (x[1] - 2) * (x[1] - 2) + (x[2] - 0.5) * (x[2] - 0.5);
+  };
+  Eigen::VectorXd x(3), lb(3);
+  x << 1.0, 1.0, 3.0;
+  lb << 0.0, 0.0, -std::numeric_limits<double>::infinity();
+  LbfgsbOptions<double> o;
+  o.tolerance = 1e-6;
+  o.max_iterations = 500;
+  int restarts = 0;
+  const auto r = MinimizeCeres(f, x, lb, o, [&](int it, int, const double&, const double&) {
+    if (it % 5 == 0) return ++restarts, IterationAction::kRestartMemory;
+    return IterationAction::kContinue;
+  });
+  EXPECT_EQ(r.stop, StopReason::kTolerance) << r.message;
+  EXPECT_NEAR(x[0], 0.0, 1e-6);
+  EXPECT_NEAR(x[1], 2.0, 1e-6);
+  EXPECT_NEAR(x[2], 0.5, 1e-6);
+  EXPECT_GE(x[0], 0.0);
 }
 
 TEST(ReweightTest, TotalsFollowTheReferenceRule) {
