@@ -98,7 +98,9 @@ void NormalizeHalves(const ScalarGrid& sdf, std::vector<double>& w) {
   for (std::size_t c = 0; c < w.size(); ++c) w[c] *= 0.5 / (sdf.values[c] < 0 ? inside : outside);
 }
 
-std::vector<double> LayerWeights(const ScalarGrid& sdf) {
+}  // namespace
+
+std::vector<int> LayerIndex(const ScalarGrid& sdf) {
   const GridFrame& f = sdf.frame;
   const int nx = f.dims[0], ny = f.dims[1], nz = f.dims[2];
   const std::size_t n = std::size_t(f.cell_count());
@@ -142,8 +144,15 @@ std::vector<double> LayerWeights(const ScalarGrid& sdf) {
       }
     }
   }
-  std::vector<double> w(n);
-  for (std::size_t c = 0; c < n; ++c) w[c] = (sdf.values[c] < 0 ? -1.0 : 1.0) / layer[c];
+  return layer;
+}
+
+namespace {
+
+std::vector<double> LayerWeights(const ScalarGrid& sdf) {
+  const std::vector<int> layer = LayerIndex(sdf);
+  std::vector<double> w(layer.size());
+  for (std::size_t c = 0; c < w.size(); ++c) w[c] = (sdf.values[c] < 0 ? -1.0 : 1.0) / layer[c];
   return w;
 }
 

@@ -26,6 +26,10 @@ enum class WeightField {
 WeightField ParseWeightField(const std::string& name);  // "layer" or "inverse"
 std::string WeightFieldName(WeightField w);
 
+// k = 1 + the 6-connected grid-layer distance of each cell from the sign interface (k = 1 on
+// cells with a 26-neighbour of the opposite strict sign): the reference code's layers.
+std::vector<int> LayerIndex(const ScalarGrid& sdf);
+
 // W on the grid of `sdf`, normalized as the reference code does: the inside cells (phi < 0)
 // sum to -0.5 and the outside cells to +0.5, so sum |W| = 1. Throws if the field has no inside
 // or no outside cell.
