@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   quijibo::cli::AddBenchCommand(app);
   quijibo::cli::AddOptimizeCommand(app);
   quijibo::cli::AddPlotCommand(app);
+  quijibo::cli::AddModuleCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

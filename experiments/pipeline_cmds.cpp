@@ -1,0 +1,207 @@
+// `quijibo sdf` and `quijibo monopoles`: from a mesh to a target field and an initial map.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "experiments/cli.h"
+#include "mesh/normalize.h"
+#include "mesh/sdf.h"
+#include "mesh/sdf_command.h"
+#include "mesh/triangle_mesh.h"
+#include "monopole/fit_pipeline.h"
+#include "monopole/initial_guess.h"
+#include "quijibo/error.h"
+#include "quijibo/frame.h"
+#include "quijibo/image.h"
+#include "quijibo/io.h"
+#include "quijibo/progress.h"
+
+namespace quijibo::cli {
+
+using nlohmann::json;
+
+namespace {
+
+// Roots as a coloured point cloud (top blue, bottom red), binary PLY, atomically.
+void WriteRootsPly(const std::string& path, const RationalMap& map, bool user_frame) {
+  std::string body;
+  int count = 0;
+  auto add = [&](const Vec4& r, std::uint8_t red, std::uint8_t blue) {
+    Vec3 p{r[0], r[1], r[2]};
+    if (user_frame) p = map.frame.fractal_to_user(p);
+    for (double c : p) {
+      const float f = float(c);
+      body.append(reinterpret_cast<const char*>(&f), 4);
+    }
+    const std::uint8_t rgb[3] = {red, 40, blue};
+    body.append(reinterpret_cast<const char*>(rgb), 3);
+    ++count;
+  };
+  for (int i = 0; i < map.top_count(); ++i) add(map.top_roots[i], 30, 230);
+  for (int i = 0; i < map.bottom_count(); ++i) add(map.bottom_roots[i], 230, 30);
+  const std::string header = "ply\nformat binary_little_endian 1.0\ncomment quijibo roots: blue top, red bottom\n"
+                             "element vertex " + std::to_string(count) +
+                             "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n"
+                             "property uchar green\nproperty uchar blue\nend_header\n";
+  WriteFileAtomically(path, header + body);
+}
+
+// The potential on the slice z = 0 of the fractal frame (through the mesh's centre), grey from
+// 0 (black) to 1 (white), the target's outline in green, roots within two cells of the slice as
+// discs: top roots blue, bottom roots red (the idea of the paper's Fig. 8).
+void WritePotentialSlice(const std::string& path, const ExteriorPotential& potential, const ScalarGrid& sdf,
+                         const RationalMap& map, int size) {
+  const Vec3 lo = sdf.frame.min_corner;
+  const double side = sdf.frame.spacing * sdf.frame.dims[0];
+  Image img(size, size);
+  auto pixel_point = [&](double x, double y) {
+    return Vec3{lo[0] + side * (x + 0.5) / size, lo[1] + side * (size - y - 0.5) / size, 0.0};
+  };
+  // P is smooth at the pixel scale: evaluate it on a 4x coarser lattice and interpolate bilinearly
+  // (the full-resolution evaluation took longer than the whole fit).
+  const int step = 4, nc = (size + step - 1) / step + 1;
+  std::vector<Vec3> coarse;
+  coarse.reserve(std::size_t(nc) * nc);
+  for (int j = 0; j < nc; ++j)
+    for (int i = 0; i < nc; ++i) coarse.push_back(pixel_point(i * step, j * step));
+  const std::vector<double> Pc = potential.Evaluate(coarse);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const int i = x / step, j = y / step;
+      const double fx = double(x % step) / step, fy = double(y % step) / step;
+      auto at = [&](int ii, int jj) { return Pc[std::size_t(jj) * nc + ii]; };
+      const double P = (1 - fy) * ((1 - fx) * at(i, j) + fx * at(i + 1, j)) + fy * ((1 - fx) * at(i, j + 1) + fx * at(i + 1, j + 1));
+      const auto g = std::uint8_t(std::lround(255 * std::clamp(P, 0.0, 1.0)));
+      img.at(x, y) = {g, g, g};
+    }
+  std::vector<Vec3> points;
+  points.reserve(std::size_t(size) * size);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) points.push_back(pixel_point(x, y));
+  // Outline: pixels whose sdf sign differs from a neighbour's.
+  auto inside = [&](int x, int y) { return sdf.sample(points[std::size_t(y) * size + x]) < 0; };
+  for (int y = 0; y + 1 < size; ++y)
+    for (int x = 0; x + 1 < size; ++x)
+      if (inside(x, y) != inside(x + 1, y) || inside(x, y) != inside(x, y + 1)) img.at(x, y) = {40, 200, 60};
+  const double slab = 2 * sdf.frame.spacing;
+  auto draw = [&](const Vec4& r, Rgb c) {
+    if (std::abs(r[2]) > slab) return;
+    img.disc((r[0] - lo[0]) / side * size, size - (r[1] - lo[1]) / side * size, std::max(2.0, size / 150.0), c);
+  };
+  for (const Vec4& r : map.top_roots) draw(r, {30, 80, 255});
+  for (const Vec4& r : map.bottom_roots) draw(r, {255, 40, 30});
+  WritePng(path, img);
+}
+
+}  // namespace
+
+void AddModuleCommands(CLI::App& app) {
+  // sdf
+  auto so = std::make_shared<SdfCommandOptions>();
+  CLI::App* sdf = app.add_subcommand(
+      "sdf", "Signed distance field of a mesh (OBJ, PLY, STL, OFF) on the target grid, as .qgrid (and .vdb)");
+  sdf->add_option("mesh", so->input, "Input mesh")->required();
+  sdf->add_option("-o,--out", so->output, "Output .qgrid (the frame goes to <name>.frame.json)")->required();
+  sdf->add_option("--vdb", so->vdb_output, "Also write the field as an OpenVDB level set");
+  sdf->add_option("-r,--resolution", so->resolution, "Cells per axis")->capture_default_str()->check(CLI::Range(4, 2048));
+  sdf->add_option("--padding", so->padding, "Normalization padding")->capture_default_str();
+  sdf->add_option("--fractal-radius", so->fractal_radius, "Fractal frame scale")->capture_default_str();
+  sdf->add_flag("--refuse-open", [so](std::int64_t) { so->sdf.allow_open = false; },
+                "Refuse meshes with holes instead of signing them by winding numbers");
+  sdf->callback([so] { RunSdfCommand(*so); });
+
+  // monopoles
+  struct Args {
+    std::string mesh, out, fit_target = "reference";
+    int resolution = 97, png_size = 800;
+    MonopoleOptions monopole;
+    InitialGuessOptions guess;
+    double padding = 0.125, fractal_radius = 4.0;
+  };
+  auto a = std::make_shared<Args>();
+  a->monopole.target = MonopoleTarget::kOneMinusPotential;
+  CLI::App* m = app.add_subcommand(
+      "monopoles",
+      "The initial guess (2015 paper §4.4): mesh -> SDF -> BEM potential -> greedy monopole fit -> map.json, "
+      "with the roots as a coloured PLY and a PNG slice of the potential");
+  m->add_option("mesh", a->mesh, "Input mesh")->required();
+  m->add_option("-o,--out", a->out, "Output folder")->required();
+  m->add_option("-r,--resolution", a->resolution, "Target grid cells per axis")->capture_default_str()->check(CLI::Range(8, 1024));
+  m->add_option("--epsilon", a->monopole.fit.epsilon, "Stop at this relative residual")->capture_default_str();
+  m->add_option("--fit-target", a->fit_target,
+                "reference: fit 1 - P as the reference code (top and bottom roots, the paper's results); "
+                "potential: fit P as the paper's text (positive monopoles only)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"reference", "potential"}));
+  m->add_option("--candidates", a->monopole.sampling.count, "Blue-noise candidates on the surface")->capture_default_str();
+  m->add_option("--batch", a->monopole.fit.batch_size, "Fresh candidates per greedy step")->capture_default_str();
+  m->add_option("--seed", a->monopole.fit.seed, "Seed of the candidate order")->capture_default_str();
+  m->add_option("--sampling-seed", a->monopole.sampling.seed, "Seed of the blue-noise sampling")->capture_default_str();
+  m->add_option("--offset", a->monopole.shell.offset_cells, "Offset of the fitting shell, in cells")->capture_default_str();
+  m->add_option("--bem-elements", a->monopole.bem.max_elements, "BEM elements (patches)")->capture_default_str();
+  m->add_option("--amplitude", a->guess.amplitude, "Exponent multiplier (reference: 3000)")->capture_default_str();
+  m->add_flag("--no-zero-roots", [a](std::int64_t) { a->guess.leading_zero_roots = false; },
+              "Leave out the reference's leading zero roots");
+  m->add_option("--scan-resolution", a->guess.scan_resolution, "Grid of the ln C scan")->capture_default_str();
+  m->add_option("--padding", a->padding, "Normalization padding")->capture_default_str();
+  m->add_option("--fractal-radius", a->fractal_radius, "Fractal frame scale")->capture_default_str();
+  m->add_option("--png-size", a->png_size, "Pixels per side of potential.png")->capture_default_str()->check(CLI::Range(16, 8192));
+  m->callback([a] {
+    a->monopole.target = a->fit_target == "reference" ? MonopoleTarget::kOneMinusPotential : MonopoleTarget::kPotential;
+    if (auto why = a->monopole.validate(); !why.empty()) throw Error("monopoles: " + why);
+    if (auto why = a->guess.validate(); !why.empty()) throw Error("monopoles: " + why);
+    MeshReadReport report;
+    const TriangleMesh user = ReadMesh(a->mesh, &report);
+    const FractalFrame frame = NormalizationFor(user, a->padding, a->fractal_radius);
+    const TriangleMesh mesh = ToFractalFrame(user, frame);
+    SdfOptions sdf_options;
+    sdf_options.name = a->mesh;
+    const auto t0 = std::chrono::steady_clock::now();
+    const ScalarGrid sdf = SignedDistance(mesh, TargetGridFrame(a->resolution, frame), sdf_options);
+    const double sdf_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    Progress progress("monopoles", 1.0, false);
+    const MonopoleResult fit = FitMonopoles(mesh.vertices, mesh.triangles, sdf, a->monopole, [&](const MonopoleProgress& p) {
+      if (p.stage == "fit")
+        progress.update(std::min(0.99, std::log(p.relative_residual) / std::log(a->monopole.fit.epsilon)),
+                        "step " + std::to_string(p.step) + ", residual " + std::to_string(p.relative_residual));
+      else
+        progress.update(0.0, p.stage + " done");
+    });
+    progress.finish();
+    LnCScan scan;
+    const auto t1 = std::chrono::steady_clock::now();
+    RationalMap map = InitialMap(fit.monopoles, frame, sdf, a->guess, &scan);
+    const double scan_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    map.provenance = {{"made_by", "quijibo monopoles"}, {"mesh", std::filesystem::path(a->mesh).filename().string()},
+                      {"resolution", a->resolution}, {"epsilon", a->monopole.fit.epsilon},
+                      {"fit_target", a->fit_target}, {"candidates", a->monopole.sampling.count},
+                      {"seed", a->monopole.fit.seed}, {"sampling_seed", a->monopole.sampling.seed},
+                      {"amplitude", a->guess.amplitude}, {"relative_residual", fit.fit.final_relative_residual},
+                      {"monopoles", fit.monopoles.size()}};
+    // Everything computed: now write.
+    std::filesystem::create_directories(a->out);
+    const std::string dir = a->out + "/";
+    ScalarGrid target = sdf;
+    WriteGrid(dir + "target.qgrid", target);
+    WriteFrameJson(FrameJsonPathFor(dir + "target.qgrid"), frame, a->mesh, a->resolution);
+    WriteMap(dir + "map.json", map);
+    WriteRootsPly(dir + "roots.ply", map, true);
+    const auto t2 = std::chrono::steady_clock::now();
+    WritePotentialSlice(dir + "potential.png", *fit.potential, sdf, map, a->png_size);
+    const double png_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count();
+    const json summary = {
+        {"mesh", a->mesh}, {"triangles", mesh.triangles.size()}, {"degenerate_dropped", report.degenerate_dropped},
+        {"top_roots", map.top_count()}, {"bottom_roots", map.bottom_count()},
+        {"monopoles", fit.monopoles.size()}, {"positive", fit.positive_count()}, {"negative", fit.negative_count()},
+        {"relative_residual", fit.fit.final_relative_residual}, {"steps", fit.fit.steps},
+        {"shell_points", fit.shell_points}, {"candidates", fit.candidates},
+        {"bem_elements", fit.bem.elements}, {"ln_C", map.ln_C},
+        {"seconds", {{"sdf", sdf_seconds}, {"bem", fit.seconds.bem}, {"shell", fit.seconds.shell},
+                     {"potential", fit.seconds.potential}, {"sampling", fit.seconds.sampling},
+                     {"fit", fit.seconds.fit}, {"ln_C_scan", scan_seconds}, {"png", png_seconds}}}};
+    WriteFileAtomically(dir + "monopoles.json", summary.dump(1) + "\n");
+    std::printf("%s\n", summary.dump(1).c_str());
+  });
+}
+
+}  // namespace quijibo::cli

@@ -1,0 +1,24 @@
+// Normalization of a user's mesh into the unit cube and the fractal frame (see quijibo/frame.h).
+#pragma once
+
+#include "mesh/triangle_mesh.h"
+#include "quijibo/frame.h"
+
+namespace quijibo {
+
+// The reference code's rule (TRIANGLE_MESH::normalize): the bounding box centre goes to
+// (0.5, 0.5, 0.5) and the longest side becomes 1 - 2 * padding, uniformly scaled; so with the
+// default padding the mesh spans [0.125, 0.875] on its longest axis.
+//   mesh            the user's mesh (at least one vertex, not all at one point)
+//   padding         in [0, 0.5)
+//   fractal_radius  > 0, the fractal frame is w = fractal_radius * (p - 0.5)
+// Throws quijibo::Error when the bounding box is a point or the options are invalid.
+FractalFrame NormalizationFor(const TriangleMesh& mesh, double padding = 0.125,
+                              double fractal_radius = 4.0);
+
+// Maps every vertex user -> fractal frame (ToFractalFrame) or back (FromFractalFrame).
+// Orientation is kept (the maps are a positive scale and a translation).
+TriangleMesh ToFractalFrame(const TriangleMesh& mesh, const FractalFrame& frame);
+TriangleMesh FromFractalFrame(const TriangleMesh& mesh, const FractalFrame& frame);
+
+}  // namespace quijibo

@@ -1,0 +1,121 @@
+#include "mesh/sdf_command.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "mesh/normalize.h"
+#include "quijibo/error.h"
+#include "quijibo/io.h"
+
+namespace quijibo {
+
+std::string SdfCommandOptions::validate() const {
+  if (input.empty()) return "an input mesh is required";
+  if (output.empty()) return "an output .qgrid path is required";
+  if (resolution < 2 || resolution > 2048) return "resolution must be in [2, 2048]";
+  if (!(padding >= 0.0 && padding < 0.5)) return "padding must be in [0, 0.5)";
+  if (!(fractal_radius > 0.0) || !std::isfinite(fractal_radius))
+    return "fractal radius must be a positive finite number";
+  if (output == vdb_output || output == FrameJsonPathFor(output) ||
+      vdb_output == FrameJsonPathFor(output))
+    return "the output files must have different paths";
+  return sdf.validate();
+}
+
+std::string FrameJsonPathFor(const std::string& qgrid_path) {
+  std::filesystem::path p(qgrid_path);
+  p.replace_extension(".frame.json");
+  return p.string();
+}
+
+void WriteFrameJson(const std::string& path, const FractalFrame& frame,
+                    const std::string& source_mesh, int resolution) {
+  nlohmann::json j = {{"format", "quijibo-frame"},
+                      {"version", 1},
+                      {"fractal_radius", frame.fractal_radius},
+                      {"padding", frame.padding},
+                      {"scale", frame.scale},
+                      {"translation", frame.translation},
+                      {"source_mesh", source_mesh},
+                      {"resolution", resolution}};
+  WriteFileAtomically(path, j.dump(2) + "\n");
+}
+
+FractalFrame ReadFrameJson(const std::string& path) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(ReadFile(path));
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path + ": not valid JSON: " + e.what());
+  }
+  if (!j.is_object() || j.value("format", "") != "quijibo-frame")
+    throw Error(path + ": \"format\" should be \"quijibo-frame\"");
+  FractalFrame frame;
+  try {
+    frame.fractal_radius = j.at("fractal_radius").get<double>();
+    frame.padding = j.at("padding").get<double>();
+    frame.scale = j.at("scale").get<double>();
+    frame.translation = j.at("translation").get<Vec3>();
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path + ": " + e.what());
+  }
+  if (const std::string why = frame.validate(); !why.empty()) throw Error(path + ": " + why);
+  return frame;
+}
+
+void RunSdfCommand(const SdfCommandOptions& options) {
+  if (const std::string why = options.validate(); !why.empty()) throw Error("sdf: " + why);
+  MeshReadReport report;
+  const TriangleMesh user_mesh = ReadMesh(options.input, &report);
+  const FractalFrame frame =
+      NormalizationFor(user_mesh, options.padding, options.fractal_radius);
+  const TriangleMesh mesh = ToFractalFrame(user_mesh, frame);
+  const GridFrame grid = TargetGridFrame(options.resolution, frame);
+  SdfOptions sdf_options = options.sdf;
+  sdf_options.name = options.input;
+  SdfSummary summary;
+  const ScalarGrid field = SignedDistance(mesh, grid, sdf_options, &summary);
+
+  // Write the auxiliary files first and the .qgrid last; undo on failure so a failed run
+  // leaves no partial set of outputs.
+  std::vector<std::string> written;
+  try {
+    const std::string frame_path = FrameJsonPathFor(options.output);
+    WriteFrameJson(frame_path, frame, options.input, options.resolution);
+    written.push_back(frame_path);
+    if (!options.vdb_output.empty()) {
+      WriteVdb(options.vdb_output, field, "sdf");
+      written.push_back(options.vdb_output);
+    }
+    WriteGrid(options.output, field);
+  } catch (...) {
+    for (const std::string& p : written) std::remove(p.c_str());
+    throw;
+  }
+
+  if (!options.quiet) {
+    const MeshTopology& t = summary.topology;
+    std::printf("%s: %zu vertices, %zu triangles (%lld degenerate dropped, %lld corners welded)\n",
+                options.input.c_str(), user_mesh.vertices.size(), user_mesh.triangles.size(),
+                (long long)report.degenerate_dropped, (long long)report.corners_welded);
+    std::printf("topology: %lld boundary edges, %lld non-manifold, %lld misoriented%s\n",
+                (long long)t.boundary_edges, (long long)t.non_manifold_edges,
+                (long long)t.misoriented_edges,
+                summary.flipped_orientation ? "; faces pointed inwards and were flipped" : "");
+    std::printf("frame: scale %.9g, translation (%.9g, %.9g, %.9g), fractal radius %g\n",
+                frame.scale, frame.translation[0], frame.translation[1], frame.translation[2],
+                frame.fractal_radius);
+    std::printf("sdf: %d^3 cells, spacing %.6g, range [%.6g, %.6g], %lld inside, "
+                "%lld ambiguous, %.2f s\n",
+                options.resolution, grid.spacing, summary.min_value, summary.max_value,
+                (long long)summary.inside_cells, (long long)summary.ambiguous_cells,
+                summary.seconds);
+    std::printf("wrote %s", options.output.c_str());
+    for (const std::string& p : written) std::printf(", %s", p.c_str());
+    std::printf("\n");
+  }
+}
+
+}  // namespace quijibo

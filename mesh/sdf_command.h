@@ -1,0 +1,43 @@
+// `quijibo sdf`: mesh file -> normalized fractal frame -> signed distance on the target grid.
+#pragma once
+
+#include <string>
+
+#include "mesh/sdf.h"
+#include "quijibo/frame.h"
+
+namespace quijibo {
+
+struct SdfCommandOptions {
+  std::string input;          // mesh file (.obj, .ply, .stl, .off)
+  std::string output;         // the .qgrid to write
+  std::string vdb_output;     // optional .vdb of the same field ("" = none)
+  int resolution = 97;        // n: the grid has n^3 cells (TargetGridFrame)
+  double padding = 0.125;     // normalization padding, in [0, 0.5)
+  double fractal_radius = 4.0;
+  bool quiet = false;         // no summary on standard output
+  SdfOptions sdf;             // sign policy (sdf.name is set to the input path)
+
+  // Empty when valid, else what is wrong.
+  std::string validate() const;
+};
+
+// Reads and validates the mesh, normalizes it (NormalizationFor), builds the grid with
+// TargetGridFrame(resolution, frame), computes SignedDistance, and writes
+//   options.output                  the field (.qgrid, fractal frame)
+//   FrameJsonPathFor(options.output)  the FractalFrame, so later stages can map back
+//   options.vdb_output              if set, the field as an OpenVDB level set
+// Everything is computed before anything is written, each file is written atomically, and if a
+// later write fails the files this run already wrote are removed. Throws quijibo::Error.
+void RunSdfCommand(const SdfCommandOptions& options);
+
+// "<dir>/bunny.qgrid" -> "<dir>/bunny.frame.json" (the extension, if any, is replaced).
+std::string FrameJsonPathFor(const std::string& qgrid_path);
+
+// The frame file: {"format":"quijibo-frame","version":1,"fractal_radius":..,"padding":..,
+// "scale":..,"translation":[..],"source_mesh":..,"resolution":..}.
+void WriteFrameJson(const std::string& path, const FractalFrame& frame,
+                    const std::string& source_mesh, int resolution);
+FractalFrame ReadFrameJson(const std::string& path);
+
+}  // namespace quijibo

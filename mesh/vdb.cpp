@@ -1,0 +1,112 @@
+#include "mesh/vdb.h"
+
+#include <openvdb/io/Stream.h>
+#include <openvdb/openvdb.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+#include "quijibo/error.h"
+#include "quijibo/io.h"
+
+namespace quijibo {
+
+namespace {
+
+void InitializeOpenVdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+// voxel (i, j, k) centre == grid.cell_center(i, j, k); see vdb.h.
+openvdb::math::Transform::Ptr CellCentredTransform(const GridFrame& frame) {
+  auto xform = openvdb::math::Transform::createLinearTransform(frame.spacing);
+  xform->postTranslate(openvdb::Vec3d(frame.min_corner[0] + 0.5 * frame.spacing,
+                                      frame.min_corner[1] + 0.5 * frame.spacing,
+                                      frame.min_corner[2] + 0.5 * frame.spacing));
+  return xform;
+}
+
+}  // namespace
+
+void WriteVdb(const std::string& path, const ScalarGrid& grid, const std::string& name) {
+  if (const std::string why = grid.frame.validate(); !why.empty())
+    throw Error(path + ": cannot write VDB: " + why);
+  if (std::int64_t(grid.values.size()) != grid.frame.cell_count())
+    throw Error(path + ": cannot write VDB: value count does not match the grid");
+  InitializeOpenVdb();
+  const bool level_set = grid.quantity == "signed-distance";
+  const double top = grid.values.empty()
+                         ? 0.0
+                         : *std::max_element(grid.values.begin(), grid.values.end());
+  auto vdb = openvdb::FloatGrid::create(level_set ? float(std::max(top, 0.0)) : 0.0f);
+  vdb->setTransform(CellCentredTransform(grid.frame));
+  vdb->setName(name);
+  vdb->setGridClass(level_set ? openvdb::GRID_LEVEL_SET : openvdb::GRID_FOG_VOLUME);
+  vdb->insertMeta("quijibo_quantity", openvdb::StringMetadata(grid.quantity));
+  vdb->insertMeta("quijibo_coordinates", openvdb::StringMetadata(grid.coordinates));
+  auto acc = vdb->getAccessor();
+  const auto& d = grid.frame.dims;
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i)
+        acc.setValueOn(openvdb::Coord(i, j, k), float(grid.values[grid.frame.index(i, j, k)]));
+  std::ostringstream bytes(std::ios::binary);
+  try {
+    openvdb::io::Stream(bytes).write(openvdb::GridCPtrVec{vdb});
+  } catch (const std::exception& e) {
+    throw Error(path + ": cannot write VDB: " + e.what());
+  }
+  WriteFileAtomically(path, std::move(bytes).str());
+}
+
+ScalarGrid ReadVdb(const std::string& path, const std::string& name) {
+  InitializeOpenVdb();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open VDB file");
+  openvdb::GridPtrVecPtr grids;
+  try {
+    grids = openvdb::io::Stream(in).getGrids();
+  } catch (const std::exception& e) {
+    throw Error(path + ": not a readable VDB file: " + e.what());
+  }
+  openvdb::FloatGrid::Ptr vdb;
+  for (const auto& g : *grids) {
+    auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
+    if (f && (name.empty() || f->getName() == name)) {
+      vdb = f;
+      break;
+    }
+  }
+  if (!vdb)
+    throw Error(path + ": no float grid" + (name.empty() ? std::string() : " named '" + name + "'"));
+  const auto& xform = vdb->transform();
+  const openvdb::Vec3d voxel = xform.voxelSize();
+  if (!xform.isLinear() || !xform.hasUniformScale() ||
+      std::abs(voxel[0] - voxel[1]) > 1e-12 * voxel[0])
+    throw Error(path + ": grid '" + vdb->getName() + "' does not have a uniform linear transform");
+  const openvdb::CoordBBox box = vdb->evalActiveVoxelBoundingBox();
+  if (box.empty()) throw Error(path + ": grid '" + vdb->getName() + "' has no active voxels");
+  ScalarGrid out;
+  out.frame.spacing = voxel[0];
+  const openvdb::Vec3d lo = xform.indexToWorld(box.min());
+  for (int a = 0; a < 3; ++a) {
+    out.frame.dims[a] = box.dim()[a];
+    out.frame.min_corner[a] = lo[a] - 0.5 * voxel[0];
+  }
+  if (auto m = vdb->getMetadata<openvdb::StringMetadata>("quijibo_quantity")) out.quantity = m->value();
+  if (auto m = vdb->getMetadata<openvdb::StringMetadata>("quijibo_coordinates"))
+    out.coordinates = m->value();
+  out.values.resize(std::size_t(out.frame.cell_count()));
+  auto acc = vdb->getConstAccessor();
+  for (int k = 0; k < out.frame.dims[2]; ++k)
+    for (int j = 0; j < out.frame.dims[1]; ++j)
+      for (int i = 0; i < out.frame.dims[0]; ++i)
+        out.values[out.frame.index(i, j, k)] = acc.getValue(box.min().offsetBy(i, j, k));
+  return out;
+}
+
+}  // namespace quijibo

@@ -1,0 +1,20 @@
+// Small Vec3 helpers shared by the monopole sources (internal; not part of the public API).
+#pragma once
+
+#include <cmath>
+
+#include "quijibo/grid.h"
+
+namespace quijibo::monopole_detail {
+
+inline Vec3 Sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+inline Vec3 Add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
+inline Vec3 Scale(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
+inline double Dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline Vec3 Cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+inline double Norm(const Vec3& a) { return std::sqrt(Dot(a, a)); }
+inline double Distance(const Vec3& a, const Vec3& b) { return Norm(Sub(a, b)); }
+
+}  // namespace quijibo::monopole_detail

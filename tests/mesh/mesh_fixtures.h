@@ -1,0 +1,87 @@
+// Small meshes built in code for the mesh/ tests, and a temporary folder per test.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <string>
+
+#include "mesh/triangle_mesh.h"
+
+namespace quijibo::testing {
+
+// Icosahedron subdivided `levels` times, vertices projected on the sphere (centre, radius),
+// faces counter-clockwise seen from outside.
+inline TriangleMesh Icosphere(int levels, const Vec3& centre = {0, 0, 0}, double radius = 1.0) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  TriangleMesh m;
+  m.vertices = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                 {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                 {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                 {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  auto unit = [](Vec3 p) {
+    const double n = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    return Vec3{p[0] / n, p[1] / n, p[2] / n};
+  };
+  for (auto& v : m.vertices) v = unit(v);
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      const Vec3& p = m.vertices[a];
+      const Vec3& q = m.vertices[b];
+      m.vertices.push_back(unit({p[0] + q[0], p[1] + q[1], p[2] + q[2]}));
+      return mid[key] = int(m.vertices.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> next;
+    for (const auto& f : m.triangles) {
+      const int a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
+      next.push_back({f[0], a, c});
+      next.push_back({f[1], b, a});
+      next.push_back({f[2], c, b});
+      next.push_back({a, b, c});
+    }
+    m.triangles = std::move(next);
+  }
+  for (auto& v : m.vertices)
+    for (int a = 0; a < 3; ++a) v[a] = centre[a] + radius * v[a];
+  return m;
+}
+
+// A fresh empty folder under the system temp dir, removed at the end of the test.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = std::filesystem::temp_directory_path() /
+            ("quijibo-mesh-" + std::string(info->test_suite_name()) + "-" + info->name() + "-" +
+             std::to_string(std::random_device{}()));
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  std::string write(const std::string& name, const std::string& bytes) const {
+    std::ofstream(file(name), std::ios::binary) << bytes;
+    return file(name);
+  }
+  std::size_t count() const {
+    return std::size_t(std::distance(std::filesystem::directory_iterator(path_),
+                                     std::filesystem::directory_iterator()));
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace quijibo::testing
