@@ -13,7 +13,9 @@ namespace quijibo::cli {
 void AddOptimizeCommand(CLI::App& app) {
   struct Args {
     std::string target, map_path, schedule = "25(VFRF)50(VFRF)97(VF)", out_dir, weights = "layer",
-                level_weights = "sample", evaluator = "loglinear", precision = "double", backend = "lbfgspp";
+                level_weights = "sample", evaluator = "loglinear", precision = "double", backend = "lbfgspp",
+                storage = "auto";
+    double memory_budget_gb = 8.0;
     int target_resolution = 97, memory = 5, absolute_every = 10, checkpoint_every = 25;
     int max_v = 200, max_f = 2000, max_r = 2000;
     double tolerance = 1e-5, alpha = 10;
@@ -55,6 +57,12 @@ void AddOptimizeCommand(CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(1, 1000000));
   c->add_option("--checkpoint-every", a->checkpoint_every, "Iterations between checkpoints")
       ->capture_default_str()->check(CLI::Range(1, 1000000));
+  c->add_option("--storage", a->storage, "loglinear log-distance storage: auto, double, float, on-the-fly")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "double", "float", "on-the-fly"}));
+  c->add_option("--memory-budget", a->memory_budget_gb,
+                "GB the finest level's log-distance matrix may take with --storage auto (else on the fly, ~5x slower)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0e6));
   c->callback([a] {
     OptimizeOptions o;
     PassSpec defaults[3] = {DefaultPass(PassKind::kVariable), DefaultPass(PassKind::kFull),
@@ -78,6 +86,8 @@ void AddOptimizeCommand(CLI::App& app) {
     o.level_weights = a->level_weights == "sample" ? LevelWeights::kSampleFinest : LevelWeights::kRecompute;
     o.energy.alpha = a->alpha;
     o.memory = a->memory;
+    o.loglinear.storage = ParseStorage(a->storage);
+    o.loglinear.memory_budget_bytes = a->memory_budget_gb * 1e9;
     o.absolute_every = a->absolute_every;
     o.checkpoint_every = a->checkpoint_every;
     const ScalarGrid sdf = LoadTarget(a->target, a->target_resolution);

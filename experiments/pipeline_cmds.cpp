@@ -1,6 +1,11 @@
 // `quijibo sdf` and `quijibo monopoles`: from a mesh to a target field and an initial map.
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 
 #include "experiments/cli.h"
@@ -201,6 +206,98 @@ void AddModuleCommands(CLI::App& app) {
                      {"fit", fit.seconds.fit}, {"ln_C_scan", scan_seconds}, {"png", png_seconds}}}};
     WriteFileAtomically(dir + "monopoles.json", summary.dump(1) + "\n");
     std::printf("%s\n", summary.dump(1).c_str());
+  });
+
+  // bench stages: the monopole stage's parts, timed on real meshes.
+  struct BenchArgs {
+    std::vector<std::string> meshes{"data/bunny.obj", "data/tooth.obj"};
+    int resolution = 97, repeats = 3;
+    std::string fit_target = "reference", out_md, out_json;
+  };
+  auto b = std::make_shared<BenchArgs>();
+  CLI::App* bench = app.get_subcommand("bench");
+  CLI::App* st = bench->add_subcommand(
+      "stages", "Seconds of each part of the initial guess (mesh read, SDF, BEM, shell, P on the shell, "
+                "candidates, greedy fit, ln C scan) per mesh, median of repeats, and the process's peak memory");
+  st->add_option("meshes", b->meshes, "Meshes")->capture_default_str();
+  st->add_option("-r,--resolution", b->resolution, "Target grid")->capture_default_str()->check(CLI::Range(8, 1024));
+  st->add_option("--repeats", b->repeats, "Runs per mesh (the median is reported)")->capture_default_str()->check(CLI::Range(1, 100));
+  st->add_option("--fit-target", b->fit_target, "reference (1 - P) or potential (P)")
+      ->capture_default_str()->check(CLI::IsMember({"reference", "potential"}));
+  st->add_option("--markdown", b->out_md, "Also write the Markdown table here");
+  st->add_option("--json", b->out_json, "Also write the results as JSON here");
+  st->callback([b] {
+    using Clock = std::chrono::steady_clock;
+    auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+    };
+    const char* names[] = {"read", "sdf", "bem", "shell", "potential", "candidates", "fit", "ln_C_scan", "total"};
+    std::string md = "| mesh | triangles | BEM elements | monopoles (top/bottom) |";
+    for (const char* n : names) md += std::string(" ") + n + " s |";
+    md += "\n|---|---|---|---|";
+    for (std::size_t i = 0; i < std::size(names); ++i) md += "---|";
+    md += "\n";
+    json results = json::array();
+    for (const std::string& path : b->meshes) {
+      std::vector<std::vector<double>> t(std::size(names));
+      MonopoleResult last;
+      std::int64_t triangles = 0;
+      RationalMap map;
+      for (int r = 0; r < b->repeats; ++r) {
+        const auto t0 = Clock::now();
+        const TriangleMesh user = ReadMesh(path);
+        const FractalFrame frame = NormalizationFor(user);
+        const TriangleMesh mesh = ToFractalFrame(user, frame);
+        t[0].push_back(since(t0));
+        auto t1 = Clock::now();
+        const ScalarGrid sdf = SignedDistance(mesh, TargetGridFrame(b->resolution, frame));
+        t[1].push_back(since(t1));
+        MonopoleOptions mo;
+        mo.target = b->fit_target == "reference" ? MonopoleTarget::kOneMinusPotential : MonopoleTarget::kPotential;
+        last = FitMonopoles(mesh.vertices, mesh.triangles, sdf, mo);
+        t[2].push_back(last.seconds.bem), t[3].push_back(last.seconds.shell), t[4].push_back(last.seconds.potential);
+        t[5].push_back(last.seconds.sampling), t[6].push_back(last.seconds.fit);
+        t1 = Clock::now();
+        map = InitialMap(last.monopoles, frame, sdf, InitialGuessOptions{});
+        t[7].push_back(since(t1));
+        t[8].push_back(since(t0));
+        triangles = std::int64_t(mesh.triangles.size());
+      }
+      json row = {{"mesh", path}, {"triangles", triangles}, {"bem_elements", last.bem.elements},
+                  {"top_roots", map.top_count()}, {"bottom_roots", map.bottom_count()},
+                  {"relative_residual", last.fit.final_relative_residual}};
+      md += "| " + std::filesystem::path(path).filename().string() + " | " + std::to_string(triangles) + " | " +
+            std::to_string(last.bem.elements) + " | " + std::to_string(map.top_count()) + "/" +
+            std::to_string(map.bottom_count()) + " |";
+      for (std::size_t i = 0; i < std::size(names); ++i) {
+        const double m = median(t[i]);
+        row["median_seconds"][names[i]] = m;
+        char buf[32];
+        std::snprintf(buf, sizeof buf, " %.2f |", m);
+        md += buf;
+      }
+      md += "\n";
+      results.push_back(row);
+    }
+    rusage ru{};
+    ::getrusage(RUSAGE_SELF, &ru);
+    const std::time_t now = std::time(nullptr);
+    char date[32];
+    std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
+    const int cores = int(::sysconf(_SC_NPROCESSORS_ONLN));
+    const std::string header = "Initial-guess stages, " + std::string(date) + ", " + std::to_string(cores) +
+                               " cores, " + std::to_string(b->resolution) + "^3 target, fit of " +
+                               (b->fit_target == "reference" ? "1 - P" : "P") + ", median of " +
+                               std::to_string(b->repeats) + " runs; peak memory " +
+                               std::to_string(ru.ru_maxrss / 1024) + " MB.\n\n";
+    const json doc = {{"benchmark", "stages"}, {"date", date}, {"cores", cores}, {"resolution", b->resolution},
+                      {"repeats", b->repeats}, {"fit_target", b->fit_target},
+                      {"peak_memory_mb", ru.ru_maxrss / 1024.0}, {"results", results}};
+    if (!b->out_md.empty()) WriteFileAtomically(b->out_md, header + md);
+    if (!b->out_json.empty()) WriteFileAtomically(b->out_json, doc.dump(1) + "\n");
+    std::fputs((header + md).c_str(), stdout);
   });
 }
 

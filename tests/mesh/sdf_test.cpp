@@ -174,7 +174,7 @@ double TimeSdf(const std::string& file, int n, SdfSummary* summary) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-TEST(SdfTiming, BunnyAndToothAt97) {
+TEST(SdfShippedMeshes, BunnyAndToothAreClosedAndConsistentlySigned) {
   for (const char* name : {"bunny", "tooth"}) {
     SdfSummary s;
     const double seconds = TimeSdf(std::string(QUIJIBO_SOURCE_DIR "/data/") + name + ".obj", 97, &s);
@@ -186,7 +186,6 @@ TEST(SdfTiming, BunnyAndToothAt97) {
     EXPECT_EQ(s.topology.misoriented_edges, 0);
     EXPECT_FALSE(s.flipped_orientation);
     EXPECT_EQ(s.ambiguous_cells, 0);
-    EXPECT_LT(seconds, 30.0);  // a gross-regression guard; ~2 s each on 2 idle cores
   }
 }
 

@@ -1,0 +1,73 @@
+// `quijibo monopoles` as a user meets it: the files it promises, and nothing on failure.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "quijibo/grid.h"
+#include "quijibo/rational_map.h"
+
+namespace quijibo {
+namespace {
+
+int RunQuijibo(const std::string& args, std::string* out = nullptr) {
+  const std::string cmd = std::string(QUIJIBO_BINARY) + " --quiet monopoles " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string text;
+  char buf[4096];
+  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) text.append(buf, n);
+  const int status = pclose(p);
+  if (out) *out = text;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::filesystem::path FreshDir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("quijibo_monopoles_" + name);
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+TEST(MonopolesCommand, WritesTheInitialGuessOfTheBunny) {
+  const auto dir = FreshDir("bunny");
+  std::string out;
+  ASSERT_EQ(RunQuijibo(std::string(QUIJIBO_SOURCE_DIR) + "/data/bunny.obj -o " + dir.string() +
+                    " -r 25 --candidates 10000 --bem-elements 600 --png-size 64 --amplitude 50",
+                &out),
+            0)
+      << out;
+  for (const char* f : {"map.json", "target.qgrid", "target.frame.json", "roots.ply", "potential.png", "monopoles.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  const RationalMap map = ReadMap((dir / "map.json").string());
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(dir / "monopoles.json"));
+  // The leading zero roots plus one root per monopole.
+  EXPECT_EQ(map.top_count() + map.bottom_count(), summary["monopoles"].get<int>() + 2);
+  EXPECT_LE(summary["relative_residual"].get<double>(), 0.04);
+  EXPECT_TRUE(std::isfinite(map.ln_C));
+  for (double e : map.top_exponents) EXPECT_GT(e, 0.0);
+  for (double e : map.bottom_exponents) EXPECT_GT(e, 0.0);
+  const ScalarGrid target = ReadGrid((dir / "target.qgrid").string());
+  EXPECT_EQ(target.frame.dims, (std::array<int, 3>{25, 25, 25}));
+  // The roots sit on the surface: within a cell or so of the SDF's zero level.
+  for (std::size_t i = 1; i < map.top_roots.size(); ++i) {
+    const Vec3 p{map.top_roots[i][0], map.top_roots[i][1], map.top_roots[i][2]};
+    EXPECT_LT(std::abs(target.sample(p)), 2.0 * target.frame.spacing);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(MonopolesCommand, FailureLeavesNoOutput) {
+  const auto dir = FreshDir("bad");
+  std::string out;
+  EXPECT_NE(RunQuijibo("/nonexistent/mesh.obj -o " + dir.string(), &out), 0);
+  EXPECT_NE(out.find("mesh.obj"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir));
+  EXPECT_NE(RunQuijibo(std::string(QUIJIBO_SOURCE_DIR) + "/data/bunny.obj -o " + dir.string() + " --epsilon 1.5", &out), 0);
+  EXPECT_NE(out.find("epsilon"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir));
+}
+
+}  // namespace
+}  // namespace quijibo
