@@ -70,7 +70,7 @@ double PortalMap::Blend(const Quat& q, int* which) const {
         s = base_set_(q);
         have_s = true;
       }
-      b *= p.feather > 0 ? SmoothStep(s / p.feather) : (s > 0 ? 1.0 : 0.0);
+      if (!(s > 0)) continue;  // inside the base set: the base map applies
     }
     if (b > best) {
       best = b;

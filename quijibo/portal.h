@@ -8,13 +8,14 @@
 //
 // Blend factor with feathered edges: for a portal with mask distance d(x) (negative inside) and
 // feather w > 0,
-//   B(x) = b * SmoothStep(-d(x) / w)   [* SmoothStep(s(x) / w) when exclude_base]
+//   B(x) = b * SmoothStep(-d(x) / w)   [and B = 0 where s(x) <= 0 when exclude_base]
 // so B rises from 0 on the mask's boundary to b (the portal's strength, default 1) at depth w:
 // F_F is continuous across the boundary (B = 0 there). With w = 0 the mask is a hard indicator
 // (B = b inside). exclude_base makes the mask "the portal region minus the base set" (the 2024
 // paper's turbulent snowflake; the authors' code does this with the base Julia set): s(x) is the
 // base set's signed function, phi(x) + beta(x) for the shape modulus (a distance) and log|R(q)|
-// for a rational map (not a distance: the feather is then in those units). When several portals
+// for a rational map. That cut is NOT feathered: a feathered cut leaves a visible gap between the
+// base set and the copies (measured on the snowflake). When several portals
 // overlap, the one with the largest B applies (the first on ties).
 //
 // Transform (affine, optionally blended with noise):

@@ -280,13 +280,13 @@ std::shared_ptr<PortalMap> KochMap(double side, double alpha, double feather) {
   ShapeModulusOptions so;
   so.alpha = alpha;
   auto base = std::make_shared<ShapeModulusMap>(AnalyticModulusTarget("hexagram:size=" + std::to_string(side)), v, so);
-  auto set = [base](const Quat& q) { return base->LogModulus(q) / 300.0; };
+  auto set = [base](const Quat& q) { return base->LogModulus(q); };
   return std::make_shared<PortalMap>(base, KochPortals(side, feather), set);
 }
 
 TEST(Portal, KochSnowflakeIoU) {
   const double side = 1.0;
-  auto map = KochMap(side, 300.0, 0.005);
+  auto map = KochMap(side, 3000.0, 0.005);
   View2D view;
   view.x_min = view.y_min = -0.62;
   view.x_max = view.y_max = 0.62;
