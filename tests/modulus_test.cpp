@@ -1,5 +1,6 @@
 // Shape modulus (2023) and portals (2024): versor polynomials, the map, portals, the Koch snowflake.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cmath>
 #include <filesystem>
@@ -312,6 +313,75 @@ TEST(Portal, KochSnowflakeIoU) {
   WritePng(path.string(), FieldImage(field, view, std::log(20.0)));
   EXPECT_GT(std::filesystem::file_size(path), 100u);
   std::filesystem::remove(path);
+}
+
+// Portals also work on QUIJIBO rational maps, cut by log|R| (the base set's function).
+TEST(Portal, WorksOnRationalMaps) {
+  RandomMapOptions ro;
+  ro.top = 3;
+  ro.bottom = 2;
+  ro.seed = 9;
+  auto rm = std::make_shared<RationalQuaternionMap>(RandomMap(ro));
+  Portal p;
+  p.mask.center = {0.5, 0, 0};
+  p.mask.radius = 0.3;
+  p.exclude_base = true;
+  p.transform.center = p.mask.center;
+  p.transform.scale = 2;
+  PortalMap pm(rm, {p}, [rm](const Quat& q) { return rm->LogModulus(q); });
+  const Quat q{0.55, 0.05, 0, 0};
+  if (rm->LogModulus(q) > 0) {
+    EXPECT_NEAR((pm.Apply(q) - Quat{0.1, 0.1, 0, 0}).norm(), 0.0, 1e-12);
+  } else {
+    EXPECT_NEAR((pm.Apply(q) - rm->Apply(q)).norm(), 0.0, 1e-12);
+  }
+  const Quat far{3, 0, 0, 0};
+  EXPECT_NEAR((pm.Apply(far) - rm->Apply(far)).norm(), 0.0, 1e-12);
+}
+
+struct CliRun {
+  int code;
+  std::string out;
+};
+CliRun Quijibo(const std::string& args) {
+  const std::string cmd = std::string(QUIJIBO_BINARY) + " --quiet " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+TEST(ModulusCli, KochImageAndErrors) {
+  const auto dir = std::filesystem::temp_directory_path() / "quijibo_modulus_cli";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string png = (dir / "k.png").string(), spec = (dir / "k.json").string();
+  CliRun r = Quijibo("portal --koch --png-size 64 -o " + png + " --write-spec " + spec);
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(png));
+  // The written spec reproduces the image's inside count.
+  const std::string png2 = (dir / "k2.png").string();
+  CliRun r2 = Quijibo("portal " + spec + " --png-size 64 -o " + png2);
+  EXPECT_EQ(r2.code, 0) << r2.out;
+  EXPECT_EQ(json::parse(r.out)["result"]["inside_pixels"], json::parse(r2.out)["result"]["inside_pixels"]);
+  // A bad key: one line naming the file and pointer, exit 1, nothing written.
+  std::ofstream(dir / "bad.json") << R"({"format":"quijibo-portals","version":1,"target":"hexagram","portals":[{"mask":{"type":"sphere","center":[0,0],"radius":0.1},"feathr":1}]})";
+  const std::string out = (dir / "bad.png").string();
+  r = Quijibo("portal " + (dir / "bad.json").string() + " -o " + out);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("/portals/0"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  r = Quijibo("modulus hexagram -o " + (dir / "x.ply").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
+  // 2D modulus image of an analytic target, with the generated polynomial written.
+  r = Quijibo("modulus disc --alpha 40 --png-size 48 --seed 3 --write-poly " + (dir / "p.json").string() + " -o " +
+              (dir / "d.png").string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(ReadVersorPolynomial((dir / "p.json").string()).roots.size(), 10u);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
