@@ -9,6 +9,9 @@
 
 #include "quijibo/error.h"
 #include "quijibo/image.h"
+#include "quijibo/io.h"
+#include "quijibo/target.h"
+#include "quijibo/frame.h"
 #include "quijibo/json_reader.h"
 #include "quijibo/julia.h"
 #include "quijibo/modulus.h"
@@ -381,6 +384,34 @@ TEST(ModulusCli, KochImageAndErrors) {
               (dir / "d.png").string());
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(ReadVersorPolynomial((dir / "p.json").string()).roots.size(), 10u);
+  std::filesystem::remove_all(dir);
+}
+
+// `compare` end to end on a small sphere target and a random map (needs the mesher).
+TEST(ModulusCli, CompareWritesTableAndJson) {
+  const auto dir = std::filesystem::temp_directory_path() / "quijibo_modulus_compare";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  auto path = [&](const std::string& n) { return (dir / n).string(); };
+  ScalarGrid g = AnalyticTarget("sphere", TargetGridFrame(20, FractalFrame{}));
+  WriteGrid(path("s.qgrid"), g);
+  RandomMapOptions ro;
+  ro.top = 4;
+  ro.bottom = 2;
+  WriteMap(path("map.json"), RandomMap(ro));
+  CliRun r = Quijibo("compare --target " + path("s.qgrid") + " --map " + path("map.json") +
+                     " --alpha 300 --beta 0 -r 16 --samples 2000 --png-size 32 -o " + path("out"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const json j = json::parse(ReadFile(path("out/compare.json")));
+  ASSERT_EQ(j["methods"].size(), 2u);
+  EXPECT_GT(j["methods"][1]["iou"].get<double>(), 0.8);  // the shape modulus hugs the sphere
+  EXPECT_LT(j["methods"][1]["psi_one_application"].get<double>(), -0.5);
+  EXPECT_TRUE(std::filesystem::exists(path("out/compare.md")));
+  EXPECT_TRUE(std::filesystem::exists(path("out/modulus.png")));
+  // A missing map: exit 1, no output folder content.
+  r = Quijibo("compare --target " + path("s.qgrid") + " --map " + path("nope.json") + " -o " + path("out2"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_FALSE(std::filesystem::exists(path("out2/compare.json")));
   std::filesystem::remove_all(dir);
 }
 
