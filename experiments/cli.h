@@ -19,6 +19,7 @@ void AddBenchCommand(CLI::App& app);
 void AddPlotCommand(CLI::App& app);  // experiments/plot.h
 void AddOptimizeCommand(CLI::App& app);
 void AddModuleCommands(CLI::App& app);  // sdf, monopoles
+void AddModulusCommands(CLI::App& app);  // modulus, portal, compare, bench modulus (after AddBenchCommand)
 
 // A target given on the command line: a .qgrid file, or an analytic shape ("sphere",
 // "torus:major=1,minor=0.3") sampled on the default target box (frame.h, TargetGridFrame)
