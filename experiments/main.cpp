@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   quijibo::cli::AddOptimizeCommand(app);
   quijibo::cli::AddPlotCommand(app);
   quijibo::cli::AddModuleCommands(app);
+  quijibo::cli::AddJuliaCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
