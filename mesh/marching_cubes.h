@@ -39,7 +39,7 @@ struct MeshingOptions {
   int search_min_cells = 64;          // ... but never coarser than this many cells along the longest
                                       // side (smaller strides for small resolutions; dense meshing
                                       // when the stride would fall below block_cells)
-  int block_cells = 4;                // sparse: the finest block kept or skipped (power of 2,
+  int block_cells = 2;                // sparse: the finest block kept or skipped (power of 2,
                                       // <= search_stride, divides tile_cells)
   bool show_progress = false;         // Progress on stderr (quijibo/progress.h)
   std::string validate() const;       // empty when valid, else what is wrong

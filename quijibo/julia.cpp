@@ -45,11 +45,13 @@ JuliaMap<Real>::JuliaMap(const RationalMap& map, const JuliaOptions& options) : 
   for (int i = 0; i < map.top_count(); ++i)
     if (map.tau * map.top_exponents[i] != 0) {
       top_.push_back(place(map.top_roots[i]));
+      top_zero_.push_back(top_.back() == Quaternion<Real>());
       top_exp_.push_back(Real(map.tau) * Real(map.top_exponents[i]));
     }
   for (int i = 0; i < map.bottom_count(); ++i)
     if (map.beta * map.bottom_exponents[i] != 0) {
       bottom_.push_back(place(map.bottom_roots[i]));
+      bottom_zero_.push_back(bottom_.back() == Quaternion<Real>());
       bottom_exp_.push_back(Real(map.beta) * Real(map.bottom_exponents[i]));
     }
   ln_C_ = Real(map.ln_C);
@@ -91,23 +93,35 @@ inline void LogAndVersor(const Quaternion<Real>& d, const Real& a, Real& log_nor
 }  // namespace
 
 template <class Real>
-void JuliaMap<Real>::Apply(const Quaternion<Real>& q, Real& log_modulus, Quaternion<Real>& versor) const {
+void JuliaMap<Real>::Apply(const Quaternion<Real>& q, const Real& q_log, const Quaternion<Real>& q_versor,
+                           Real& log_modulus, Quaternion<Real>& versor) const {
   using std::sqrt;
-  Real L = ln_C_;
+  Real L = ln_C_, zero_coefficient(0);
   Quaternion<Real> u(Real(1), Real(0), Real(0), Real(0));
   Real ln;
   Quaternion<Real> f;
   for (std::size_t i = 0; i < top_.size(); ++i) {
-    LogAndVersor(q - top_[i], top_exp_[i], ln, f);
-    L += top_exp_[i] * ln;
+    if (top_zero_[i]) {
+      LogAndVersor(q_versor, top_exp_[i], ln, f);
+      zero_coefficient += top_exp_[i];
+    } else {
+      LogAndVersor(q - top_[i], top_exp_[i], ln, f);
+      L += top_exp_[i] * ln;
+    }
     u = u * f;
   }
   // B^-1 = Q_nb^-1 ... Q_1^-1; the versor of Q^-1 is conj(u(Q)).
   for (std::size_t i = bottom_.size(); i-- > 0;) {
-    LogAndVersor(q - bottom_[i], bottom_exp_[i], ln, f);
-    L -= bottom_exp_[i] * ln;
+    if (bottom_zero_[i]) {
+      LogAndVersor(q_versor, bottom_exp_[i], ln, f);
+      zero_coefficient -= bottom_exp_[i];
+    } else {
+      LogAndVersor(q - bottom_[i], bottom_exp_[i], ln, f);
+      L -= bottom_exp_[i] * ln;
+    }
     u = u * f.conj();
   }
+  if (zero_coefficient != Real(0)) L += zero_coefficient * q_log;
   const Real un = sqrt(u.norm2());  // products of unit quaternions drift by rounding only
   log_modulus = L;
   versor = u * (Real(1) / un);
@@ -125,7 +139,7 @@ JuliaResult<Real> JuliaMap<Real>::Iterate(const Quaternion<Real>& q0) const {
   r.versor = n0 > Real(0) ? q0 * (Real(1) / n0) : Quaternion<Real>(Real(1), Real(0), Real(0), Real(0));
   for (int k = 0; k < options_.iterations; ++k) {
     if (!(r.log_modulus < log_escape_)) break;  // escaped (or NaN)
-    Apply(q, r.log_modulus, r.versor);
+    Apply(q, r.log_modulus, r.versor, r.log_modulus, r.versor);
     ++r.iterations;
     if (r.log_modulus < log_escape_) q = r.versor * exp(r.log_modulus);
   }

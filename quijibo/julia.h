@@ -90,8 +90,13 @@ class JuliaMap {
   JuliaResult<Real> Iterate(const Quaternion<Real>& q0) const;
   // The paper's direct form: T, B and R formed as quaternion products (may overflow).
   JuliaResult<Real> IterateDirect(const Quaternion<Real>& q0) const;
-  // One application of the map in log-polar form: log|R(q)| and versor(R(q)).
-  void Apply(const Quaternion<Real>& q, Real& log_modulus, Quaternion<Real>& versor) const;
+  // One application of the map in log-polar form: log|R(q)| and versor(R(q)). q is given both as
+  // a quaternion and as (log|q|, q/|q|): roots exactly at the origin (the reference's zero roots)
+  // use the latter, so an iterate that underflows to 0 keeps its magnitude, and their
+  // contributions are summed as (sum of their top exponents - bottom exponents) log|q| (no
+  // inf - inf at q = 0).
+  void Apply(const Quaternion<Real>& q, const Real& q_log, const Quaternion<Real>& q_versor, Real& log_modulus,
+             Quaternion<Real>& versor) const;
 
   JuliaResult<Real> At(const Vec3& p) const { return Iterate(StartingPoint(p)); }
   const JuliaOptions& options() const { return options_; }
@@ -100,6 +105,7 @@ class JuliaMap {
   JuliaOptions options_;
   std::vector<Quaternion<Real>> top_, bottom_;  // translated and scaled roots
   std::vector<Real> top_exp_, bottom_exp_;      // tau T_i, beta B_i
+  std::vector<char> top_zero_, bottom_zero_;    // root exactly at the origin
   Real ln_C_{0}, log_escape_{0};
 };
 

@@ -103,6 +103,29 @@ TEST(Julia, OneApplicationIsTheLogLinearSum) {
   }
 }
 
+// The reference's zero roots (top and bottom at the origin): an iterate at or underflowing to 0
+// keeps a finite log-modulus (no inf - inf).
+TEST(Julia, ZeroRootsGiveFiniteValues) {
+  RandomMapOptions ro;
+  ro.top = 6;
+  ro.bottom = 5;
+  ro.leading_zero_roots = true;
+  RationalMap map = RandomMap(ro);
+  map.tau = 1.3;
+  map.beta = 0.7;
+  JuliaOptions o;
+  o.iterations = 6;
+  const JuliaMap<double> d(map, o);
+  EXPECT_TRUE(std::isfinite(d.At({0, 0, 0}).log_modulus) || d.At({0, 0, 0}).log_modulus < 0);
+  Quaternion<double> u(1, 0, 0, 0);
+  double L = 0;
+  d.Apply(Quaternion<double>(), -1e6, u, L, u);  // |q| = e^-1e6: underflows in double
+  EXPECT_TRUE(std::isfinite(L));
+  int bad = 0;
+  for (const Vec3& p : Points(500, 17)) bad += std::isnan(d.At(p).log_modulus);
+  EXPECT_EQ(bad, 0);
+}
+
 TEST(Julia, EscapeStopsTheIteration) {
   RationalMap map = SmallMap();
   map.ln_C = 12.0;  // everything is thrown out at once
