@@ -257,7 +257,7 @@ void AddPicture(CLI::App& app) {
     double at = 0.0;
     int size = 512;
     JuliaArgs j;
-    double modulus_scale = 2.0;
+    double modulus_scale = 0.0;
   };
   // slice
   auto s = std::make_shared<SliceArgs>();
@@ -313,7 +313,7 @@ void AddPicture(CLI::App& app) {
   fc->add_option("--at", f->at, "Coordinate of the plane (fractal frame)")->capture_default_str();
   fc->add_option("--size", f->size, "Pixels along the longer side of each panel")->capture_default_str();
   fc->add_option("--box", f->box, "Picture box (fractal frame), default +-fractal_radius/2");
-  fc->add_option("--modulus-scale", f->modulus_scale, "Grey = 0.5 + 0.5 tanh(log|q_n| / scale)")->capture_default_str();
+  fc->add_option("--modulus-scale", f->modulus_scale, "Grey = 0.5 + 0.5 tanh((log|q_n| - iso) / scale); 0: automatic")->capture_default_str();
   f->j.add(fc);
   fc->callback([f] {
     CheckOutput(f->out, {".png"}, "the picture");

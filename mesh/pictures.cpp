@@ -81,17 +81,30 @@ Image SliceAgainstTarget(const BatchField& field, const ScalarGrid& target, cons
 Image ModulusVersorSlice(const RationalMap& map, const JuliaOptions& options, const SliceView& view,
                          double modulus_scale, double iso) {
   if (auto why = view.validate(); !why.empty()) throw Error("picture: " + why);
-  if (!(modulus_scale > 0)) throw Error("picture: modulus scale must be > 0");
+  if (!(modulus_scale >= 0) || !std::isfinite(modulus_scale)) throw Error("picture: modulus scale must be >= 0");
   const JuliaMap<double> jm(map, options);
   const int w = view.width(), h = view.height();
   std::vector<double> L(std::size_t(w) * h);
-  Image img(2 * w + 8, h, Rgb{255, 255, 255});
+  std::vector<JuliaResult<double>> results(L.size());
 #pragma omp parallel for schedule(dynamic)
   for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) results[std::size_t(y) * w + x] = jm.At(view.point(x, y));
+  if (modulus_scale == 0) {  // automatic: half the 90th percentile of |log|q_n| - iso|
+    std::vector<double> a;
+    for (const auto& r : results)
+      if (std::isfinite(r.log_modulus)) a.push_back(std::abs(r.log_modulus - iso));
+    modulus_scale = 1.0;
+    if (!a.empty()) {
+      std::nth_element(a.begin(), a.begin() + std::ptrdiff_t(0.9 * double(a.size() - 1)), a.end());
+      modulus_scale = std::max(1e-3, 0.5 * a[std::size_t(0.9 * double(a.size() - 1))]);
+    }
+  }
+  Image img(2 * w + 8, h, Rgb{255, 255, 255});
+  for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const JuliaResult<double> r = jm.At(view.point(x, y));
+      const JuliaResult<double>& r = results[std::size_t(y) * w + x];
       L[std::size_t(y) * w + x] = r.log_modulus;
-      const double g = std::isfinite(r.log_modulus) ? 0.5 + 0.5 * std::tanh(r.log_modulus / modulus_scale)
+      const double g = std::isfinite(r.log_modulus) ? 0.5 + 0.5 * std::tanh((r.log_modulus - iso) / modulus_scale)
                                                      : (r.log_modulus < 0 ? 0.0 : 1.0);
       const auto grey = std::uint8_t(std::lround(255 * std::clamp(g, 0.0, 1.0)));
       img.at(x, y) = {grey, grey, grey};

@@ -47,11 +47,12 @@ struct SliceAgreement {
 Image SliceAgainstTarget(const BatchField& field, const ScalarGrid& target, const SliceView& view,
                          SliceAgreement* agreement = nullptr);
 
-// Two panels side by side: the log-modulus log|q_m| (grey, 0.5 + 0.5 tanh(L / modulus_scale),
+// Two panels side by side: the log-modulus L = log|q_m| (grey, 0.5 + 0.5 tanh((L - iso) / scale),
+// scale = modulus_scale, or when it is 0 half the 90th percentile of |L - iso| over the picture;
 // the iso line L = iso in red) and the versor of q_m (its i, j, k components as R, G, B, mapped
 // from [-1, 1] to [0, 255]).
 Image ModulusVersorSlice(const RationalMap& map, const JuliaOptions& options, const SliceView& view,
-                         double modulus_scale = 2.0, double iso = 0.0);
+                         double modulus_scale = 0.0, double iso = 0.0);
 
 // `views` (1 to 4) orthographic views side by side: front (looking along -z), side (along -x),
 // top (along -y) and three-quarter; each `size` pixels square, light from the viewer's upper left.

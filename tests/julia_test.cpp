@@ -45,7 +45,7 @@ TEST(Julia, LogPolarDoubleMatchesFloat128) {
   const JuliaMap<float128> q(map, o);
   int compared = 0, escaped = 0;
   double worst = 0;
-  for (const Vec3& p : Points(3000, 7)) {
+  for (const Vec3& p : Points(1500, 7)) {
     const auto rq = q.IterateDirect(q.StartingPoint(p));
     const auto rd = d.Iterate(d.StartingPoint(p));
     if (rq.escaped || rd.escaped) {

@@ -207,7 +207,7 @@ TEST(MarchingCubes, InvalidOptionsThrow) {
   o.resolution = 1;
   EXPECT_THROW(MeshField(Sphere(1), o), Error);
   o = {};
-  o.tile_cells = 30;
+  o.tile_cells = 31;
   EXPECT_THROW(MeshField(Sphere(1), o), Error);
   o = {};
   o.max_corner[1] = o.min_corner[1];
