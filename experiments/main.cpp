@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   quijibo::cli::AddPlotCommand(app);
   quijibo::cli::AddModuleCommands(app);
   quijibo::cli::AddModulusCommands(app);
+  quijibo::cli::AddJuliaCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -22,7 +22,7 @@
 #include "quijibo/error.h"
 #include "quijibo/io.h"
 #include "quijibo/json_reader.h"
-#include "quijibo/julia.h"
+#include "quijibo/quaternion_map.h"
 #include "quijibo/modulus.h"
 #include "quijibo/portal.h"
 #include "quijibo/target.h"
@@ -168,12 +168,12 @@ Versor MakeVersor(const VersorArgs& a, const ModulusTarget& target) {
 }
 
 // The Julia field of a map as a BatchField on points p (mesh frame): q = [s p, 0].
-BatchField MakeField(std::shared_ptr<const QuaternionMap> map, const JuliaOptions& o, double point_scale) {
+BatchField MakeField(std::shared_ptr<const QuaternionMap> map, const IterationOptions& o, double point_scale) {
   BatchField f;
   f.iso = 0.0;
   f.evaluate = [map, o, point_scale](const Vec3* p, std::size_t n, double* out) {
     for (std::size_t i = 0; i < n; ++i)
-      out[i] = JuliaField(*map, {point_scale * p[i][0], point_scale * p[i][1], point_scale * p[i][2], 0.0}, o);
+      out[i] = IterateField(*map, {point_scale * p[i][0], point_scale * p[i][1], point_scale * p[i][2], 0.0}, o);
   };
   return f;
 }
@@ -208,7 +208,7 @@ struct Product {
 
 Product Produce(std::shared_ptr<const QuaternionMap> map, const OutputArgs& o, const ModulusTarget& target,
                 bool two_d) {
-  JuliaOptions jo;
+  IterationOptions jo;
   jo.iterations = o.iterations;
   jo.escape_radius = o.escape;
   if (auto why = jo.validate(); !why.empty()) throw Error(why);
@@ -704,7 +704,7 @@ void AddModulusCommands(CLI::App& app) {
       auto sm = std::make_shared<ShapeModulusMap>(target, v, so);
       const double sm_fit = Now() - t0;
       auto qj = std::make_shared<RationalQuaternionMap>(rmap);
-      JuliaOptions sjo{a->sm_iterations, a->sm_escape}, qjo{a->qj_iterations, a->qj_escape};
+      IterationOptions sjo{a->sm_iterations, a->sm_escape}, qjo{a->qj_iterations, a->qj_escape};
       if (auto why = sjo.validate(); !why.empty()) throw Error(why);
       if (auto why = qjo.validate(); !why.empty()) throw Error(why);
       // Fields on the grid (fractal frame): one application (the 2015 energy's L) and n iterates.
@@ -716,9 +716,9 @@ void AddModulusCommands(CLI::App& app) {
         const Vec3 w = eg.frame.cell_center(c);
         const Quat qw{w[0], w[1], w[2], eg.slice}, qu{k * w[0], k * w[1], k * w[2], 0.0};
         qj1[c] = qj->LogModulus(qw);
-        qjn[c] = JuliaField(*qj, qw, qjo);
+        qjn[c] = IterateField(*qj, qw, qjo);
         sm1[c] = sm->LogModulus(qu);
-        smn[c] = JuliaField(*sm, qu, sjo);
+        smn[c] = IterateField(*sm, qu, sjo);
       }
       auto iou = [&](const std::vector<double>& fld) {
         std::int64_t both = 0, either = 0;
@@ -754,8 +754,8 @@ void AddModulusCommands(CLI::App& app) {
         return {{"to_target", to}, {"from_target", from}, {"chamfer", to + from}};
       };
       const json qj_ch = chamfer(qj_mesh), sm_ch = chamfer(sm_mesh);
-      const Image qj_img = SliceImage([&](const Vec3& p) { return JuliaField(*qj, {p[0], p[1], p[2], 0}, qjo); }, *grid, a->png_size);
-      const Image sm_img = SliceImage([&](const Vec3& p) { return JuliaField(*sm, {k * p[0], k * p[1], k * p[2], 0}, sjo); }, *grid, a->png_size);
+      const Image qj_img = SliceImage([&](const Vec3& p) { return IterateField(*qj, {p[0], p[1], p[2], 0}, qjo); }, *grid, a->png_size);
+      const Image sm_img = SliceImage([&](const Vec3& p) { return IterateField(*sm, {k * p[0], k * p[1], k * p[2], 0}, sjo); }, *grid, a->png_size);
       auto method = [&](const std::string& name, json fit, double psi1, double psin, double io, const json& ch,
                         const TriangleMesh& m, double ms, double mcpu, const std::string& png, const std::string& ply) {
         return json{{"method", name}, {"fit_seconds", fit}, {"psi_one_application", psi1}, {"psi_iterated", psin},
@@ -848,7 +848,7 @@ void AddModulusCommands(CLI::App& app) {
       so.alpha = a->alpha;
       so.beta = a->beta;
       auto map = std::make_shared<ShapeModulusMap>(lt.target, v, so);
-      JuliaOptions jo{a->iterations, a->escape};
+      IterationOptions jo{a->iterations, a->escape};
       const int n = a->resolution;
       // The authors' node placement: min + i span / res, i < res, on [-0.5, 0.5]^3.
       std::vector<double> wall, cpu;
@@ -867,7 +867,7 @@ void AddModulusCommands(CLI::App& app) {
             for (int y = 0; y < n; ++y)
               for (int x = 0; x < n; ++x) {
                 int used = 0;
-                const double f = JuliaField(*map, {-0.5 + double(x) / n, -0.5 + double(y) / n, -0.5 + double(z) / n, 0.0}, jo, &used);
+                const double f = IterateField(*map, {-0.5 + double(x) / n, -0.5 + double(y) / n, -0.5 + double(z) / n, 0.0}, jo, &used);
                 lin += f < 0;
                 ++local[used];
               }

@@ -6,9 +6,11 @@
 //
 // INTERFACE FIXED BY THE LEAD (issue 5 implements it, issue 6 uses it): change it only together.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "mesh/triangle_mesh.h"
 #include "quijibo/grid.h"
@@ -32,6 +34,14 @@ struct MeshingOptions {
   bool sparse = true;                 // coarse-to-fine block search; false evaluates every node
   int tile_cells = 32;                // cells per tile side (the unit of parallel work and memory)
   int coarse_margin_cells = 2;        // safety margin of the sparse block search, in fine cells
+  // Added by issue 5 (see docs/meshing.md):
+  int search_stride = 8;              // sparse: the coarsest lattice, evaluated everywhere (power of 2)
+  int search_min_cells = 64;          // ... but never coarser than this many cells along the longest
+                                      // side (smaller strides for small resolutions; dense meshing
+                                      // when the stride would fall below block_cells)
+  int block_cells = 2;                // sparse: the finest block kept or skipped (power of 2,
+                                      // <= search_stride, divides tile_cells)
+  bool show_progress = false;         // Progress on stderr (quijibo/progress.h)
   std::string validate() const;       // empty when valid, else what is wrong
 };
 
@@ -41,8 +51,40 @@ struct MeshingSummary {
   std::int64_t non_finite_values = 0;
   std::int64_t tiles_total = 0, tiles_meshed = 0;
   double seconds = 0.0;
+  // Added by issue 5:
+  std::int64_t search_evaluations = 0;  // sparse search (included in nodes_evaluated)
+  std::int64_t blocks_active = 0;       // blocks meshed (sparse), of blocks_total
+  std::int64_t blocks_total = 0;
+  std::int64_t vertices = 0, triangles = 0;
+  int search_stride = 0;                // the stride the sparse search used (0: dense)
+  std::array<int, 3> cells{0, 0, 0};    // cells per axis of the lattice meshed
+  double spacing = 0.0;                 // cell side
   std::string report() const;         // a few readable lines
 };
+
+// The lattice MeshField samples: nodes at min_corner + spacing * (i, j, k), i in [0, cells_x],
+// spacing = longest side / resolution, cells per axis rounded up so the lattice covers the box.
+struct MeshLattice {
+  Vec3 origin{0.0, 0.0, 0.0};
+  double spacing = 0.0;
+  std::array<int, 3> cells{0, 0, 0};
+  Vec3 node(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return {origin[0] + spacing * double(i), origin[1] + spacing * double(j), origin[2] + spacing * double(k)};
+  }
+};
+MeshLattice LatticeFor(const MeshingOptions& options);
+
+// The field on a narrow band around the surface (the nodes of every cell the surface crosses),
+// for .vdb export. Nodes are indices into the MeshLattice.
+struct FieldBand {
+  MeshLattice lattice;
+  std::vector<std::array<int, 3>> nodes;
+  std::vector<float> values;  // non-finite values stored as +FLT_MAX (outside)
+};
+
+// As above, also filling `band` when it is not null.
+TriangleMesh MeshField(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary,
+                       FieldBand* band);
 
 // Meshes {f = iso} inside the box. Vertices are shared between cells and tiles (no duplicates at
 // seams), triangles are counter-clockwise seen from outside (f > iso). Throws quijibo::Error on

@@ -63,6 +63,34 @@ void WriteVdb(const std::string& path, const ScalarGrid& grid, const std::string
   WriteFileAtomically(path, std::move(bytes).str());
 }
 
+void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
+                    const std::vector<std::array<int, 3>>& voxels, const std::vector<float>& values,
+                    float background, double iso, const std::string& name, const std::string& quantity,
+                    const std::string& coordinates) {
+  if (voxels.size() != values.size()) throw Error(path + ": cannot write VDB: voxel and value counts differ");
+  if (!(spacing > 0) || !std::isfinite(spacing)) throw Error(path + ": cannot write VDB: bad spacing");
+  InitializeOpenVdb();
+  auto vdb = openvdb::FloatGrid::create(background);
+  auto xform = openvdb::math::Transform::createLinearTransform(spacing);
+  xform->postTranslate(openvdb::Vec3d(origin[0], origin[1], origin[2]));
+  vdb->setTransform(xform);
+  vdb->setName(name);
+  vdb->setGridClass(openvdb::GRID_FOG_VOLUME);
+  vdb->insertMeta("quijibo_quantity", openvdb::StringMetadata(quantity));
+  vdb->insertMeta("quijibo_coordinates", openvdb::StringMetadata(coordinates));
+  vdb->insertMeta("quijibo_iso", openvdb::DoubleMetadata(iso));
+  auto acc = vdb->getAccessor();
+  for (std::size_t n = 0; n < voxels.size(); ++n)
+    acc.setValueOn(openvdb::Coord(voxels[n][0], voxels[n][1], voxels[n][2]), values[n]);
+  std::ostringstream bytes(std::ios::binary);
+  try {
+    openvdb::io::Stream(bytes).write(openvdb::GridCPtrVec{vdb});
+  } catch (const std::exception& e) {
+    throw Error(path + ": cannot write VDB: " + e.what());
+  }
+  WriteFileAtomically(path, std::move(bytes).str());
+}
+
 ScalarGrid ReadVdb(const std::string& path, const std::string& name) {
   InitializeOpenVdb();
   std::ifstream in(path, std::ios::binary);

@@ -1,109 +1,185 @@
 #include "quijibo/julia.h"
 
-#include <algorithm>
 #include <cmath>
+
+#include "quijibo/error.h"
 
 namespace quijibo {
 
+SampleTransform SampleTransform::AxisAngle(const Vec3& axis, double degrees, const Vec3& center) {
+  const double n = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+  if (!(n > 0) || !std::isfinite(n) || !std::isfinite(degrees))
+    throw Error("rotation: the axis must be finite and non-zero and the angle finite");
+  const double x = axis[0] / n, y = axis[1] / n, z = axis[2] / n;
+  const double a = degrees * M_PI / 180.0, c = std::cos(a), s = std::sin(a), t = 1 - c;
+  SampleTransform r;
+  r.rotation = {t * x * x + c,     t * x * y - s * z, t * x * z + s * y,
+                t * x * y + s * z, t * y * y + c,     t * y * z - s * x,
+                t * x * z - s * y, t * y * z + s * x, t * z * z + c};
+  r.center = center;
+  return r;
+}
+
 std::string JuliaOptions::validate() const {
-  if (iterations < 1 || iterations > 100000) return "iterations must be in [1, 100000]";
-  if (!(escape_radius > 0) || !std::isfinite(escape_radius)) return "escape radius must be a positive number";
+  if (iterations < 1 || iterations > 1000) return "iterations must be in [1, 1000]";
+  if (!(escape_radius > 1.0) || !std::isfinite(escape_radius)) return "escape radius must be finite and > 1";
+  if (!std::isfinite(slice)) return "slice must be finite";
+  for (double t : root_translation)
+    if (!std::isfinite(t)) return "root translation must be finite";
+  if (!(root_scale > 0) || !std::isfinite(root_scale)) return "root scale must be finite and > 0";
+  for (double r : placement.rotation)
+    if (!std::isfinite(r)) return "rotation must be finite";
   return {};
 }
 
-std::string View2D::validate() const {
-  if (width < 1 || height < 1 || width > 32768 || height > 32768) return "image size must be in [1, 32768]";
-  if (!(x_max > x_min) || !(y_max > y_min)) return "the view box must have x_max > x_min and y_max > y_min";
-  return {};
-}
-
-std::vector<double> SampleField2D(const QuaternionMap& map, const JuliaOptions& o, const View2D& v) {
-  std::vector<double> field(std::size_t(v.width) * v.height);
-  const double dx = (v.x_max - v.x_min) / v.width, dy = (v.y_max - v.y_min) / v.height;
-#pragma omp parallel for schedule(dynamic, 4)
-  for (int py = 0; py < v.height; ++py)
-    for (int px = 0; px < v.width; ++px) {
-      const Quat q{v.x_min + (px + 0.5) * dx, v.y_max - (py + 0.5) * dy, 0.0, 0.0};
-      field[std::size_t(py) * v.width + px] = JuliaField(map, q, o);
+template <class Real>
+JuliaMap<Real>::JuliaMap(const RationalMap& map, const JuliaOptions& options) : options_(options) {
+  if (auto why = map.validate(); !why.empty()) throw Error("map: " + why);
+  if (auto why = options.validate(); !why.empty()) throw Error(why);
+  const Vec4& t = options.root_translation;
+  auto place = [&](const Vec4& r) {
+    return Quaternion<Real>(Real(options.root_scale * r[0] + t[0]), Real(options.root_scale * r[1] + t[1]),
+                            Real(options.root_scale * r[2] + t[2]), Real(options.root_scale * r[3] + t[3]));
+  };
+  // Roots with a zero exponent contribute exactly 1 (and would give 0 * inf on the root itself).
+  for (int i = 0; i < map.top_count(); ++i)
+    if (map.tau * map.top_exponents[i] != 0) {
+      top_.push_back(place(map.top_roots[i]));
+      top_zero_.push_back(top_.back() == Quaternion<Real>());
+      top_exp_.push_back(Real(map.tau) * Real(map.top_exponents[i]));
     }
-  return field;
-}
-
-Image FieldImage(const std::vector<double>& field, const View2D& v, double outside_scale) {
-  Image img(v.width, v.height);
-  for (std::size_t i = 0; i < field.size(); ++i) {
-    const double f = field[i];
-    if (f < 0) {
-      img.pixels[i] = {0, 0, 0};
-    } else {
-      const double t = std::clamp(f / std::max(outside_scale, 1e-9), 0.0, 1.0);
-      const auto g = std::uint8_t(std::lround(120 + 135 * std::sqrt(t)));
-      img.pixels[i] = {g, g, g};
+  for (int i = 0; i < map.bottom_count(); ++i)
+    if (map.beta * map.bottom_exponents[i] != 0) {
+      bottom_.push_back(place(map.bottom_roots[i]));
+      bottom_zero_.push_back(bottom_.back() == Quaternion<Real>());
+      bottom_exp_.push_back(Real(map.beta) * Real(map.bottom_exponents[i]));
     }
-  }
-  return img;
+  ln_C_ = Real(map.ln_C);
+  using std::log;
+  log_escape_ = log(Real(options.escape_radius));
 }
 
-Quat UnitPower(const Quat& d, double a) {
-  if (a >= 0 && a <= 1024 && a == std::floor(a)) {
-    unsigned n = unsigned(a);
-    Quat result{1, 0, 0, 0}, base = d;
-    while (n) {
-      if (n & 1u) result = result * base;
-      n >>= 1u;
-      if (n) base = base * base;
-    }
-    return result;
-  }
-  const double vn = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-  const double theta = std::atan2(vn, d.w);
-  double ax = 1, ay = 0, az = 0;
-  if (vn > 0) {
-    ax = d.x / vn;
-    ay = d.y / vn;
-    az = d.z / vn;
-  }
-  const double phi = a * theta, s = std::sin(phi);
-  return {std::cos(phi), ax * s, ay * s, az * s};
+template <class Real>
+Quaternion<Real> JuliaMap<Real>::StartingPoint(const Vec3& p) const {
+  const Vec3 w = options_.placement.apply(p);
+  const Vec4& t = options_.root_translation;
+  return {Real(w[0]) + Real(t[0]), Real(w[1]) + Real(t[1]), Real(w[2]) + Real(t[2]),
+          Real(options_.slice) + Real(t[3])};
 }
 
-RationalQuaternionMap::RationalQuaternionMap(const RationalMap& map) : ln_C_(map.ln_C) {
-  for (int i = 0; i < map.top_count(); ++i) {
-    top_.push_back(map.top_root<double>(i));
-    top_e_.push_back(map.tau * map.top_exponents[i]);
-  }
-  for (int i = 0; i < map.bottom_count(); ++i) {
-    bottom_.push_back(map.bottom_root<double>(i));
-    bottom_e_.push_back(map.beta * map.bottom_exponents[i]);
+namespace {
+
+// log|d| and the versor of d^a: [cos(a theta), axis sin(a theta)].
+template <class Real>
+inline void LogAndVersor(const Quaternion<Real>& d, const Real& a, Real& log_norm, Quaternion<Real>& u) {
+  using std::atan2;
+  using std::cos;
+  using std::log;
+  using std::sin;
+  using std::sqrt;
+  const Real v2 = d.x * d.x + d.y * d.y + d.z * d.z;
+  const Real vn = sqrt(v2);
+  log_norm = Real(0.5) * log(d.w * d.w + v2);
+  const Real phi = a * atan2(vn, d.w);
+  const Real c = cos(phi), s = sin(phi);
+  if (vn > Real(0)) {
+    const Real k = s / vn;
+    u = {c, d.x * k, d.y * k, d.z * k};
+  } else {
+    u = {c, s, Real(0), Real(0)};  // axis i for reals, as quaternion.h's log
   }
 }
 
-double RationalQuaternionMap::LogModulus(const Quat& q) const {
-  double L = ln_C_;
-  for (std::size_t i = 0; i < top_.size(); ++i) L += top_e_[i] * 0.5 * std::log((q - top_[i]).norm2());
-  for (std::size_t i = 0; i < bottom_.size(); ++i) L -= bottom_e_[i] * 0.5 * std::log((q - bottom_[i]).norm2());
-  return L;
-}
+}  // namespace
 
-Quat RationalQuaternionMap::Apply(const Quat& q) const {
-  double L = ln_C_;
-  Quat t{1, 0, 0, 0}, b{1, 0, 0, 0};
+template <class Real>
+void JuliaMap<Real>::Apply(const Quaternion<Real>& q, const Real& q_log, const Quaternion<Real>& q_versor,
+                           Real& log_modulus, Quaternion<Real>& versor) const {
+  using std::sqrt;
+  Real L = ln_C_, zero_coefficient(0);
+  Quaternion<Real> u(Real(1), Real(0), Real(0), Real(0));
+  Real ln;
+  Quaternion<Real> f;
   for (std::size_t i = 0; i < top_.size(); ++i) {
-    const Quat d = q - top_[i];
-    const double n2 = d.norm2();
-    L += top_e_[i] * 0.5 * std::log(n2);
-    if (n2 > 0) t = t * UnitPower(d * (1.0 / std::sqrt(n2)), top_e_[i]);
+    if (top_zero_[i]) {
+      LogAndVersor(q_versor, top_exp_[i], ln, f);
+      zero_coefficient += top_exp_[i];
+    } else {
+      LogAndVersor(q - top_[i], top_exp_[i], ln, f);
+      L += top_exp_[i] * ln;
+    }
+    u = u * f;
   }
-  for (std::size_t i = 0; i < bottom_.size(); ++i) {
-    const Quat d = q - bottom_[i];
-    const double n2 = d.norm2();
-    L -= bottom_e_[i] * 0.5 * std::log(n2);
-    if (n2 > 0) b = b * UnitPower(d * (1.0 / std::sqrt(n2)), bottom_e_[i]);
+  // B^-1 = Q_nb^-1 ... Q_1^-1; the versor of Q^-1 is conj(u(Q)).
+  for (std::size_t i = bottom_.size(); i-- > 0;) {
+    if (bottom_zero_[i]) {
+      LogAndVersor(q_versor, bottom_exp_[i], ln, f);
+      zero_coefficient -= bottom_exp_[i];
+    } else {
+      LogAndVersor(q - bottom_[i], bottom_exp_[i], ln, f);
+      L -= bottom_exp_[i] * ln;
+    }
+    u = u * f.conj();
   }
-  Quat dir = t * b.conj();
-  const double dn = dir.norm();
-  dir = dn > 0 ? dir * (1.0 / dn) : Quat{1, 0, 0, 0};
-  return dir * std::exp(L);
+  if (zero_coefficient != Real(0)) L += zero_coefficient * q_log;
+  const Real un = sqrt(u.norm2());  // products of unit quaternions drift by rounding only
+  log_modulus = L;
+  versor = u * (Real(1) / un);
 }
+
+template <class Real>
+JuliaResult<Real> JuliaMap<Real>::Iterate(const Quaternion<Real>& q0) const {
+  using std::exp;
+  using std::log;
+  using std::sqrt;
+  JuliaResult<Real> r;
+  Quaternion<Real> q = q0;
+  const Real n0 = sqrt(q0.norm2());
+  r.log_modulus = log(n0);
+  r.versor = n0 > Real(0) ? q0 * (Real(1) / n0) : Quaternion<Real>(Real(1), Real(0), Real(0), Real(0));
+  for (int k = 0; k < options_.iterations; ++k) {
+    if (!(r.log_modulus < log_escape_)) break;  // escaped (or NaN)
+    Apply(q, r.log_modulus, r.versor, r.log_modulus, r.versor);
+    ++r.iterations;
+    if (r.log_modulus < log_escape_) q = r.versor * exp(r.log_modulus);
+  }
+  r.escaped = r.log_modulus >= log_escape_;
+  return r;
+}
+
+template <class Real>
+JuliaResult<Real> JuliaMap<Real>::IterateDirect(const Quaternion<Real>& q0) const {
+  using std::exp;
+  using std::log;
+  using std::sqrt;
+  JuliaResult<Real> r;
+  Quaternion<Real> q = q0;
+  const Real escape(options_.escape_radius);
+  const Real eC = exp(ln_C_);
+  for (int k = 0; k < options_.iterations; ++k) {
+    if (!(sqrt(q.norm2()) < escape)) break;
+    Quaternion<Real> T(Real(1), Real(0), Real(0), Real(0)), B = T, lg, p;
+    for (std::size_t i = 0; i < top_.size(); ++i) {
+      LogAndPower(q - top_[i], top_exp_[i], lg, p);
+      T = T * p;
+    }
+    for (std::size_t i = 0; i < bottom_.size(); ++i) {
+      LogAndPower(q - bottom_[i], bottom_exp_[i], lg, p);
+      B = B * p;
+    }
+    q = (T * B.inverse()) * eC;
+    ++r.iterations;
+  }
+  const Real n = sqrt(q.norm2());
+  r.log_modulus = log(n);
+  r.versor = n > Real(0) ? q * (Real(1) / n) : Quaternion<Real>(Real(1), Real(0), Real(0), Real(0));
+  r.escaped = !(n < escape);
+  return r;
+}
+
+template class JuliaMap<float>;
+template class JuliaMap<double>;
+template class JuliaMap<long double>;
+template class JuliaMap<float128>;
 
 }  // namespace quijibo

@@ -40,7 +40,7 @@
 #include <vector>
 
 #include "quijibo/grid.h"
-#include "quijibo/julia.h"
+#include "quijibo/quaternion_map.h"
 #include "quijibo/mask.h"
 
 namespace quijibo {

@@ -35,7 +35,7 @@
 #include <string>
 #include <vector>
 
-#include "quijibo/julia.h"
+#include "quijibo/quaternion_map.h"
 #include "quijibo/mask.h"
 #include "quijibo/modulus.h"
 

@@ -13,7 +13,7 @@
 #include "quijibo/target.h"
 #include "quijibo/frame.h"
 #include "quijibo/json_reader.h"
-#include "quijibo/julia.h"
+#include "quijibo/quaternion_map.h"
 #include "quijibo/modulus.h"
 #include "quijibo/portal.h"
 
@@ -141,14 +141,14 @@ TEST(ShapeModulus, HighAlphaSetMatchesSphere) {
   ShapeModulusOptions so;
   so.alpha = 300.0;
   ShapeModulusMap map(AnalyticModulusTarget("sphere:radius=0.4"), v, so);
-  JuliaOptions jo;
+  IterationOptions jo;
   const int n = 32;
   int both = 0, either = 0;
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
         const Vec3 p{-0.6 + 1.2 * (i + 0.5) / n, -0.6 + 1.2 * (j + 0.5) / n, -0.6 + 1.2 * (k + 0.5) / n};
-        const bool julia = JuliaField(map, {p[0], p[1], p[2], 0.0}, jo) < 0;
+        const bool julia = IterateField(map, {p[0], p[1], p[2], 0.0}, jo) < 0;
         const bool target = map.target().phi(p) < 0;
         both += julia && target;
         either += julia || target;
@@ -168,7 +168,7 @@ TEST(ShapeModulus, NegativeBetaMovesTheSurfaceOutwards) {
     so.beta = beta;
     ShapeModulusMap map(AnalyticModulusTarget("sphere:radius=0.3"), v, so);
     int count = 0;
-    for (int i = 0; i < 200; ++i) count += JuliaField(map, {-0.5 + i / 200.0, 0.01, 0.02, 0}, JuliaOptions{}) < 0;
+    for (int i = 0; i < 200; ++i) count += IterateField(map, {-0.5 + i / 200.0, 0.01, 0.02, 0}, IterationOptions{}) < 0;
     return count;
   };
   EXPECT_LT(inside(0.05), inside(0.0));
@@ -295,7 +295,7 @@ TEST(Portal, KochSnowflakeIoU) {
   view.x_min = view.y_min = -0.62;
   view.x_max = view.y_max = 0.62;
   view.width = view.height = 300;
-  JuliaOptions jo;
+  IterationOptions jo;
   jo.iterations = 30;
   const std::vector<double> field = SampleField2D(*map, jo, view);
   const auto koch = KochPolygon(side, 5);

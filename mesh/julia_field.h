@@ -1,0 +1,27 @@
+// The Julia set of a rational map as a BatchField for the mesher: f(p) = log|q_m| (julia.h), the
+// surface f = iso (default 0), in the precision asked for.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+
+#include "mesh/marching_cubes.h"
+#include "quijibo/julia.h"
+#include "quijibo/real.h"
+
+namespace quijibo {
+
+// What the field saw, counted across threads.
+struct JuliaFieldStats {
+  std::atomic<std::int64_t> evaluations{0};
+  std::atomic<std::int64_t> escaped{0};     // stopped at the escape radius
+  std::atomic<std::int64_t> non_finite{0};  // NaN or -inf log-modulus (a sample on a root)
+};
+
+// Throws quijibo::Error when the map or the options are invalid. `stats` may be null; it must
+// outlive the field.
+BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, double iso = 0.0,
+                          Precision precision = Precision::kDouble, JuliaFieldStats* stats = nullptr);
+
+}  // namespace quijibo

@@ -1,0 +1,630 @@
+// Marching cubes with bisection on the edges, sparse coarse-to-fine block search, parallel tiles.
+//
+// Layout. Nodes of the lattice (MeshLattice) are indexed (i, j, k), i in [0, cells_x]; the edge
+// from node (i, j, k) along axis a has the global id 3 * (i + N_x (j + N_y k)) + a (N = cells + 1).
+// Every vertex sits on one edge and is keyed by that id, so the tiles mesh independently: a seam
+// edge is bisected by each tile that touches it, from the same end values and in the same order,
+// giving bit-identical positions, and the merge keeps one vertex per id. Vertices come out sorted
+// by edge id and triangles in tile order, then cell order: the output does not depend on the
+// number of threads, and the dense and sparse modes give the same mesh when the search misses
+// nothing.
+//
+// Case table. Built at start-up from the corner signs, not copied from a table: on each cube face
+// the crossing edges are paired into segments (an ambiguous face, two diagonal inside corners,
+// cuts off each inside corner: neighbouring cells see the same face and pair it the same way, so
+// the surface has no cracks); the segments of the six faces form closed cycles, each cycle is one
+// polygon, oriented so that its normal points from the inside corners to the outside ones, and fanned
+// into triangles.
+#include "mesh/marching_cubes.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+#include "quijibo/error.h"
+#include "quijibo/progress.h"
+
+namespace quijibo {
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Case table.
+
+struct CubeEdge {
+  int axis;
+  int c0, c1;  // corners, c1 = c0 + (1 << axis)
+};
+
+constexpr int CornerBit(int c, int axis) { return (c >> axis) & 1; }
+
+std::array<CubeEdge, 12> MakeEdges() {
+  std::array<CubeEdge, 12> e{};
+  for (int a = 0; a < 3; ++a) {
+    const int b1 = (a + 1) % 3 < (a + 2) % 3 ? (a + 1) % 3 : (a + 2) % 3;
+    const int b2 = 3 - a - b1;
+    for (int m = 0; m < 4; ++m) {
+      const int c0 = ((m & 1) << b1) | (((m >> 1) & 1) << b2);
+      e[4 * a + m] = {a, c0, c0 | (1 << a)};
+    }
+  }
+  return e;
+}
+
+const std::array<CubeEdge, 12>& Edges() {
+  static const std::array<CubeEdge, 12> e = MakeEdges();
+  return e;
+}
+
+struct CaseTable {
+  // For each of the 256 configurations (bit c set: corner c inside), triangles as cube-edge triples.
+  std::array<std::vector<std::array<std::uint8_t, 3>>, 256> triangles;
+};
+
+CaseTable MakeCaseTable() {
+  const auto& E = Edges();
+  CaseTable table;
+  auto corner_pos = [](int c) {
+    return std::array<double, 3>{double(c & 1), double((c >> 1) & 1), double((c >> 2) & 1)};
+  };
+  for (int config = 0; config < 256; ++config) {
+    auto inside = [&](int c) { return (config >> c) & 1; };
+    std::array<std::vector<int>, 12> adj;
+    for (int a = 0; a < 3; ++a)
+      for (int side = 0; side < 2; ++side) {
+        std::vector<int> face_edges;
+        for (int e = 0; e < 12; ++e)
+          if (E[e].axis != a && CornerBit(E[e].c0, a) == side) face_edges.push_back(e);
+        std::vector<int> crossing;
+        for (int e : face_edges)
+          if (inside(E[e].c0) != inside(E[e].c1)) crossing.push_back(e);
+        if (crossing.size() == 2) {
+          adj[crossing[0]].push_back(crossing[1]);
+          adj[crossing[1]].push_back(crossing[0]);
+        } else if (crossing.size() == 4) {
+          // Ambiguous face: pair the two crossing edges at each inside corner.
+          for (int c = 0; c < 8; ++c) {
+            if (CornerBit(c, a) != side || !inside(c)) continue;
+            std::vector<int> at;
+            for (int e : crossing)
+              if (E[e].c0 == c || E[e].c1 == c) at.push_back(e);
+            adj[at[0]].push_back(at[1]);
+            adj[at[1]].push_back(at[0]);
+          }
+        }
+      }
+    std::array<bool, 12> used{};
+    for (int start = 0; start < 12; ++start) {
+      if (used[start] || adj[start].empty()) continue;
+      std::vector<int> cycle{start};
+      used[start] = true;
+      int prev = -1, cur = start;
+      for (;;) {
+        const int next = adj[cur][0] != prev ? adj[cur][0] : adj[cur][1];
+        if (next == start) break;
+        cycle.push_back(next);
+        used[next] = true;
+        prev = cur;
+        cur = next;
+      }
+      // Orientation: polygon normal (Newell) against the inside -> outside direction.
+      std::array<double, 3> n{0, 0, 0}, d{0, 0, 0};
+      std::vector<std::array<double, 3>> p;
+      for (int e : cycle) {
+        auto a = corner_pos(E[e].c0), b = corner_pos(E[e].c1);
+        p.push_back({(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2});
+        const double s = inside(E[e].c0) ? 1.0 : -1.0;  // from the inside end to the outside end
+        for (int k = 0; k < 3; ++k) d[k] += s * (b[k] - a[k]);
+      }
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        const auto& u = p[i];
+        const auto& v = p[(i + 1) % p.size()];
+        n[0] += (u[1] - v[1]) * (u[2] + v[2]);
+        n[1] += (u[2] - v[2]) * (u[0] + v[0]);
+        n[2] += (u[0] - v[0]) * (u[1] + v[1]);
+      }
+      if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] < 0) std::reverse(cycle.begin(), cycle.end());
+      for (std::size_t i = 1; i + 1 < cycle.size(); ++i)
+        table.triangles[config].push_back(
+            {std::uint8_t(cycle[0]), std::uint8_t(cycle[i]), std::uint8_t(cycle[i + 1])});
+    }
+  }
+  return table;
+}
+
+const CaseTable& Table() {
+  static const CaseTable t = MakeCaseTable();
+  return t;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+inline bool Inside(double v, double iso) { return v < iso; }  // NaN and +inf: outside
+
+struct Counters {
+  std::atomic<std::int64_t> nodes{0}, bisection{0}, non_finite{0}, search{0};
+};
+
+// Evaluates `points` into `values` (one call per chunk), counting non-finite values.
+void Evaluate(const BatchField& field, const Vec3* points, std::size_t n, double* values,
+              std::atomic<std::int64_t>& counter, Counters& counters) {
+  if (n == 0) return;
+  field.evaluate(points, n, values);
+  std::int64_t bad = 0;
+  for (std::size_t i = 0; i < n; ++i) bad += !std::isfinite(values[i]);
+  counter += std::int64_t(n);
+  if (bad) counters.non_finite += bad;
+}
+
+// Evaluates many points in parallel chunks (for the sparse search).
+void EvaluateParallel(const BatchField& field, const std::vector<Vec3>& points, std::vector<double>& values,
+                      Counters& counters) {
+  values.assign(points.size(), 0.0);
+  const std::int64_t chunk = 2048, n = std::int64_t(points.size());
+  const std::int64_t chunks = (n + chunk - 1) / chunk;
+#pragma omp parallel for schedule(dynamic)
+  for (std::int64_t c = 0; c < chunks; ++c) {
+    const std::int64_t b = c * chunk, e = std::min(n, b + chunk);
+    Evaluate(field, points.data() + b, std::size_t(e - b), values.data() + b, counters.search, counters);
+  }
+  counters.nodes += n;
+}
+
+struct Geometry {
+  MeshLattice lattice;
+  std::array<std::int64_t, 3> nodes;  // nodes per axis
+  std::int64_t node_id(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return i + nodes[0] * (j + nodes[1] * k);
+  }
+};
+
+// Blocks of `stride` cells: block b spans cells [b s, min((b + 1) s, n)).
+struct BlockGrid {
+  int stride;
+  std::array<std::int64_t, 3> count;
+  std::int64_t id(std::int64_t i, std::int64_t j, std::int64_t k) const { return i + count[0] * (j + count[1] * k); }
+  std::array<std::int64_t, 3> coords(std::int64_t id) const {
+    return {id % count[0], (id / count[0]) % count[1], id / (count[0] * count[1])};
+  }
+};
+
+BlockGrid MakeBlocks(const MeshLattice& l, int stride) {
+  BlockGrid g{stride, {}};
+  for (int a = 0; a < 3; ++a) g.count[a] = (l.cells[a] + stride - 1) / stride;
+  return g;
+}
+
+// The sparse search: returns the sorted ids of the active blocks of `block_cells`.
+std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOptions& o, int first_stride,
+                                       const Geometry& geo, Counters& counters) {
+  const MeshLattice& l = geo.lattice;
+  std::vector<std::int64_t> candidates;  // block ids at the current stride
+  int stride = first_stride;
+  {
+    const BlockGrid g = MakeBlocks(l, stride);
+    candidates.resize(std::size_t(g.count[0] * g.count[1] * g.count[2]));
+    for (std::size_t i = 0; i < candidates.size(); ++i) candidates[i] = std::int64_t(i);
+  }
+  Progress progress("mesh: sparse search", 1.0, !o.show_progress);
+  double done = 0.0;
+  for (;;) {
+    const BlockGrid g = MakeBlocks(l, stride);
+    // Corner nodes of the candidates.
+    std::vector<std::int64_t> keys;
+    keys.reserve(candidates.size() * 8);
+    auto corner = [&](std::int64_t b, int a, int bit) { return std::min<std::int64_t>((b + bit) * stride, l.cells[a]); };
+    for (std::int64_t id : candidates) {
+      const auto c = g.coords(id);
+      for (int v = 0; v < 8; ++v)
+        keys.push_back(geo.node_id(corner(c[0], 0, v & 1), corner(c[1], 1, (v >> 1) & 1), corner(c[2], 2, (v >> 2) & 1)));
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    std::vector<Vec3> points(keys.size());
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      const std::int64_t k = keys[i];
+      points[i] = l.node(k % geo.nodes[0], (k / geo.nodes[0]) % geo.nodes[1], k / (geo.nodes[0] * geo.nodes[1]));
+    }
+    std::vector<double> values;
+    EvaluateParallel(field, points, values, counters);
+    points = {};
+    auto value_of = [&](std::int64_t key) {
+      return values[std::size_t(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin())];
+    };
+    // Crossing blocks.
+    std::vector<std::int64_t> crossing;
+    for (std::int64_t id : candidates) {
+      const auto c = g.coords(id);
+      int in = 0;
+      for (int v = 0; v < 8; ++v)
+        in += Inside(value_of(geo.node_id(corner(c[0], 0, v & 1), corner(c[1], 1, (v >> 1) & 1),
+                                          corner(c[2], 2, (v >> 2) & 1))),
+                     field.iso);
+      if (in != 0 && in != 8) crossing.push_back(id);
+    }
+    // Dilate by the margin (at least one block).
+    const int m = std::max(1, (o.coarse_margin_cells + stride - 1) / stride);
+    std::vector<std::int64_t> marked;
+    marked.reserve(crossing.size() * 8);
+    for (std::int64_t id : crossing) {
+      const auto c = g.coords(id);
+      for (std::int64_t dk = -m; dk <= m; ++dk)
+        for (std::int64_t dj = -m; dj <= m; ++dj)
+          for (std::int64_t di = -m; di <= m; ++di) {
+            const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
+            if (i < 0 || j < 0 || k < 0 || i >= g.count[0] || j >= g.count[1] || k >= g.count[2]) continue;
+            marked.push_back(g.id(i, j, k));
+          }
+    }
+    std::sort(marked.begin(), marked.end());
+    marked.erase(std::unique(marked.begin(), marked.end()), marked.end());
+    done = 0.5 * (done + 1.0);
+    progress.update(done, std::to_string(marked.size()) + " blocks of " + std::to_string(stride) + " cells");
+    if (stride == o.block_cells) {
+      progress.finish();
+      return marked;
+    }
+    // Children at half the stride.
+    const int half = stride / 2;
+    const BlockGrid child = MakeBlocks(l, half);
+    candidates.clear();
+    for (std::int64_t id : marked) {
+      const auto c = g.coords(id);
+      for (int v = 0; v < 8; ++v) {
+        const std::int64_t i = 2 * c[0] + (v & 1), j = 2 * c[1] + ((v >> 1) & 1), k = 2 * c[2] + ((v >> 2) & 1);
+        if (i < child.count[0] && j < child.count[1] && k < child.count[2]) candidates.push_back(child.id(i, j, k));
+      }
+    }
+    std::sort(candidates.begin(), candidates.end());
+    stride = half;
+  }
+}
+
+struct TileResult {
+  std::vector<std::int64_t> vertex_edges;  // global edge ids, in order of creation
+  std::vector<Vec3> vertex_positions;
+  std::vector<std::array<std::int32_t, 3>> triangles;  // local vertex indices
+  std::vector<std::array<int, 3>> band_nodes;
+  std::vector<float> band_values;
+};
+
+// Meshes one tile. `active` (per block of the tile, x fastest) says which blocks to mesh.
+void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& geo, const std::array<int, 3>& c0,
+              const std::array<int, 3>& c1, const std::vector<char>& active, bool want_band, Counters& counters,
+              TileResult& out) {
+  const MeshLattice& l = geo.lattice;
+  const auto& E = Edges();
+  const auto& table = Table();
+  const double iso = field.iso;
+  const int bc = o.block_cells;
+  const std::array<int, 3> n{c1[0] - c0[0], c1[1] - c0[1], c1[2] - c0[2]};  // cells
+  const std::array<int, 3> nn{n[0] + 1, n[1] + 1, n[2] + 1};                 // nodes
+  const std::array<int, 3> nb{(n[0] + bc - 1) / bc, (n[1] + bc - 1) / bc, (n[2] + bc - 1) / bc};
+  auto local = [&](int i, int j, int k) { return std::size_t(i) + std::size_t(nn[0]) * (std::size_t(j) + std::size_t(nn[1]) * k); };
+  const std::size_t node_count = std::size_t(nn[0]) * nn[1] * nn[2];
+
+  // Nodes needed: those of active blocks.
+  std::vector<char> needed(node_count, 0);
+  for (int bk = 0; bk < nb[2]; ++bk)
+    for (int bj = 0; bj < nb[1]; ++bj)
+      for (int bi = 0; bi < nb[0]; ++bi) {
+        if (!active[std::size_t(bi) + std::size_t(nb[0]) * (bj + std::size_t(nb[1]) * bk)]) continue;
+        for (int k = bk * bc; k <= std::min((bk + 1) * bc, n[2]); ++k)
+          for (int j = bj * bc; j <= std::min((bj + 1) * bc, n[1]); ++j)
+            for (int i = bi * bc; i <= std::min((bi + 1) * bc, n[0]); ++i) needed[local(i, j, k)] = 1;
+      }
+  std::vector<std::uint32_t> which;
+  std::vector<Vec3> points;
+  for (int k = 0; k < nn[2]; ++k)
+    for (int j = 0; j < nn[1]; ++j)
+      for (int i = 0; i < nn[0]; ++i)
+        if (needed[local(i, j, k)]) {
+          which.push_back(std::uint32_t(local(i, j, k)));
+          points.push_back(l.node(c0[0] + i, c0[1] + j, c0[2] + k));
+        }
+  std::vector<double> value(node_count, std::numeric_limits<double>::quiet_NaN());
+  {
+    std::vector<double> v(points.size());
+    Evaluate(field, points.data(), points.size(), v.data(), counters.nodes, counters);
+    for (std::size_t i = 0; i < which.size(); ++i) value[which[i]] = v[i];
+  }
+  needed = {};
+
+  // Cells: triangles and the crossing edges they need.
+  std::vector<std::int32_t> vertex_of(3 * node_count, -1);
+  struct Pending {
+    Vec3 a, b;
+    double fa;
+  };
+  std::vector<Pending> pending;
+  std::vector<char> band_flag;
+  if (want_band) band_flag.assign(node_count, 0);
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        if (!active[std::size_t(i / bc) + std::size_t(nb[0]) * (j / bc + std::size_t(nb[1]) * (k / bc))]) continue;
+        int config = 0;
+        for (int c = 0; c < 8; ++c)
+          config |= int(Inside(value[local(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))], iso)) << c;
+        if (config == 0 || config == 255) continue;
+        if (want_band)
+          for (int c = 0; c < 8; ++c) band_flag[local(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))] = 1;
+        std::array<std::int32_t, 12> vid;
+        vid.fill(-1);
+        for (const auto& tri : table.triangles[config]) {
+          std::array<std::int32_t, 3> t;
+          for (int v = 0; v < 3; ++v) {
+            const int e = tri[v];
+            if (vid[e] < 0) {
+              const int c = E[e].c0;
+              const int ni = i + (c & 1), nj = j + ((c >> 1) & 1), nk = k + ((c >> 2) & 1);
+              const std::size_t key = 3 * local(ni, nj, nk) + std::size_t(E[e].axis);
+              if (vertex_of[key] < 0) {
+                vertex_of[key] = std::int32_t(pending.size());
+                std::array<std::int64_t, 3> g{c0[0] + ni, c0[1] + nj, c0[2] + nk};
+                out.vertex_edges.push_back(3 * geo.node_id(g[0], g[1], g[2]) + E[e].axis);
+                const Vec3 a = l.node(g[0], g[1], g[2]);
+                g[E[e].axis] += 1;
+                pending.push_back({a, l.node(g[0], g[1], g[2]), value[local(ni, nj, nk)]});
+              }
+              vid[e] = vertex_of[key];
+            }
+            t[v] = vid[e];
+          }
+          out.triangles.push_back(t);
+        }
+      }
+  vertex_of = {};
+
+  // Bisection on all crossing edges of the tile at once; the vertex is the last midpoint.
+  const std::size_t nv = pending.size();
+  out.vertex_positions.resize(nv);
+  std::vector<char> done(nv, 0);
+  std::vector<std::uint32_t> open;
+  std::vector<Vec3> mid;
+  std::vector<double> fm;
+  for (int step = 0; step < o.bisection_steps; ++step) {
+    open.clear();
+    mid.clear();
+    for (std::size_t v = 0; v < nv; ++v)
+      if (!done[v]) {
+        open.push_back(std::uint32_t(v));
+        const Pending& p = pending[v];
+        mid.push_back({0.5 * (p.a[0] + p.b[0]), 0.5 * (p.a[1] + p.b[1]), 0.5 * (p.a[2] + p.b[2])});
+      }
+    if (open.empty()) break;
+    fm.resize(mid.size());
+    Evaluate(field, mid.data(), mid.size(), fm.data(), counters.bisection, counters);
+    for (std::size_t q = 0; q < open.size(); ++q) {
+      Pending& p = pending[open[q]];
+      out.vertex_positions[open[q]] = mid[q];
+      if (std::abs(fm[q] - iso) < o.bisection_tolerance) {
+        done[open[q]] = 1;
+      } else if (Inside(fm[q], iso) == Inside(p.fa, iso)) {
+        p.a = mid[q];
+        p.fa = fm[q];
+      } else {
+        p.b = mid[q];
+      }
+    }
+  }
+
+  if (want_band)
+    for (int k = 0; k < nn[2]; ++k)
+      for (int j = 0; j < nn[1]; ++j)
+        for (int i = 0; i < nn[0]; ++i)
+          if (band_flag[local(i, j, k)]) {
+            const double v = value[local(i, j, k)];
+            out.band_nodes.push_back({c0[0] + i, c0[1] + j, c0[2] + k});
+            out.band_values.push_back(std::isfinite(v) ? float(std::clamp(v, -3.0e38, 3.0e38))
+                                                       : (v < 0 ? -std::numeric_limits<float>::max()
+                                                                : std::numeric_limits<float>::max()));
+          }
+}
+
+}  // namespace
+
+std::string MeshingOptions::validate() const {
+  auto pow2 = [](int v) { return v > 0 && (v & (v - 1)) == 0; };
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(min_corner[a]) || !std::isfinite(max_corner[a])) return "box corners must be finite";
+    if (!(max_corner[a] > min_corner[a])) return "box: max corner must exceed min corner on every axis";
+  }
+  if (resolution < 2 || resolution > 65536) return "resolution must be in [2, 65536]";
+  if (bisection_steps < 1 || bisection_steps > 60) return "bisection steps must be in [1, 60]";
+  if (!(bisection_tolerance >= 0) || !std::isfinite(bisection_tolerance)) return "bisection tolerance must be finite and >= 0";
+  if (!pow2(block_cells)) return "block cells must be a power of 2";
+  if (!pow2(search_stride) || search_stride < block_cells) return "search stride must be a power of 2 >= block cells";
+  if (tile_cells < block_cells || tile_cells > 256 || tile_cells % block_cells != 0)
+    return "tile cells must be a multiple of block cells, at most 256";
+  if (coarse_margin_cells < 0) return "coarse margin must be >= 0";
+  if (search_min_cells < 1) return "search min cells must be >= 1";
+  double longest = 0;
+  for (int a = 0; a < 3; ++a) longest = std::max(longest, max_corner[a] - min_corner[a]);
+  for (int a = 0; a < 3; ++a)
+    if ((max_corner[a] - min_corner[a]) / longest * resolution > 65536) return "box too elongated";
+  return {};
+}
+
+std::string MeshingSummary::report() const {
+  std::ostringstream s;
+  s << "lattice " << cells[0] << " x " << cells[1] << " x " << cells[2] << " cells of " << spacing << "\n"
+    << "tiles meshed " << tiles_meshed << " of " << tiles_total << ", blocks " << blocks_active << " of "
+    << blocks_total << "\n"
+    << "field evaluations " << nodes_evaluated << " at nodes (" << search_evaluations << " in the search) + "
+    << bisection_evaluations << " in bisection, non-finite " << non_finite_values << "\n"
+    << "vertices " << vertices << ", triangles " << triangles << ", " << seconds << " s\n";
+  return s.str();
+}
+
+MeshLattice LatticeFor(const MeshingOptions& o) {
+  MeshLattice l;
+  double longest = 0;
+  for (int a = 0; a < 3; ++a) longest = std::max(longest, o.max_corner[a] - o.min_corner[a]);
+  l.origin = o.min_corner;
+  l.spacing = longest / o.resolution;
+  for (int a = 0; a < 3; ++a) {
+    const double cells = (o.max_corner[a] - o.min_corner[a]) / l.spacing;
+    l.cells[a] = std::max(1, int(std::ceil(cells - 1e-9 * o.resolution)));
+  }
+  return l;
+}
+
+TriangleMesh MeshField(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary) {
+  return MeshField(field, options, summary, nullptr);
+}
+
+TriangleMesh MeshField(const BatchField& field, const MeshingOptions& o, MeshingSummary* summary, FieldBand* band) {
+  if (auto why = o.validate(); !why.empty()) throw Error("meshing: " + why);
+  if (!field.evaluate) throw Error("meshing: the field has no evaluate function");
+  if (!std::isfinite(field.iso)) throw Error("meshing: the iso value must be finite");
+  const auto t0 = std::chrono::steady_clock::now();
+  Geometry geo;
+  geo.lattice = LatticeFor(o);
+  for (int a = 0; a < 3; ++a) geo.nodes[a] = geo.lattice.cells[a] + 1;
+  Counters counters;
+  const BlockGrid blocks = MakeBlocks(geo.lattice, o.block_cells);
+
+  // The coarsest stride: at most search_stride, and at least search_min_cells cells along the
+  // longest side; dense when that leaves nothing to skip.
+  int stride = o.search_stride;
+  const int longest = std::max({geo.lattice.cells[0], geo.lattice.cells[1], geo.lattice.cells[2]});
+  while (stride > 1 && longest / stride < o.search_min_cells) stride /= 2;
+  const bool sparse = o.sparse && stride >= o.block_cells;
+
+  // Active blocks (sorted ids), or all of them.
+  std::vector<std::int64_t> active_blocks;
+  if (sparse) active_blocks = SearchBlocks(field, o, stride, geo, counters);
+  const std::int64_t search_evaluations = counters.search;
+
+  // Tiles.
+  const int T = o.tile_cells, per = T / o.block_cells;
+  std::array<std::int64_t, 3> tiles;
+  for (int a = 0; a < 3; ++a) tiles[a] = (geo.lattice.cells[a] + T - 1) / T;
+  const std::int64_t tiles_total = tiles[0] * tiles[1] * tiles[2];
+  std::vector<std::int64_t> tile_list;  // tiles with an active block, in order
+  std::vector<std::vector<std::int64_t>> tile_blocks;  // their active block ids (sparse)
+  if (sparse) {
+    std::vector<std::pair<std::int64_t, std::int64_t>> tb;  // (tile, block)
+    tb.reserve(active_blocks.size());
+    for (std::int64_t id : active_blocks) {
+      const auto c = blocks.coords(id);
+      tb.push_back({(c[0] / per) + tiles[0] * ((c[1] / per) + tiles[1] * (c[2] / per)), id});
+    }
+    active_blocks = {};
+    std::sort(tb.begin(), tb.end());
+    for (const auto& [t, b] : tb) {
+      if (tile_list.empty() || tile_list.back() != t) {
+        tile_list.push_back(t);
+        tile_blocks.emplace_back();
+      }
+      tile_blocks.back().push_back(b);
+    }
+  } else {
+    tile_list.resize(std::size_t(tiles_total));
+    for (std::int64_t t = 0; t < tiles_total; ++t) tile_list[std::size_t(t)] = t;
+  }
+  std::int64_t blocks_active = 0;
+
+  std::vector<TileResult> results(tile_list.size());
+  Progress progress("mesh: tiles", double(tile_list.size()), !o.show_progress);
+  std::int64_t tiles_done = 0;
+  const bool want_band = band != nullptr;
+#pragma omp parallel for schedule(dynamic) reduction(+ : blocks_active)
+  for (std::int64_t ti = 0; ti < std::int64_t(tile_list.size()); ++ti) {
+    const std::int64_t t = tile_list[std::size_t(ti)];
+    const std::array<std::int64_t, 3> tc{t % tiles[0], (t / tiles[0]) % tiles[1], t / (tiles[0] * tiles[1])};
+    std::array<int, 3> c0, c1, nb;
+    for (int a = 0; a < 3; ++a) {
+      c0[a] = int(tc[a] * T);
+      c1[a] = std::min(c0[a] + T, geo.lattice.cells[a]);
+      nb[a] = (c1[a] - c0[a] + o.block_cells - 1) / o.block_cells;
+    }
+    std::vector<char> active(std::size_t(nb[0]) * nb[1] * nb[2], sparse ? 0 : 1);
+    if (sparse)
+      for (std::int64_t id : tile_blocks[std::size_t(ti)]) {
+        const auto c = blocks.coords(id);
+        active[std::size_t(c[0] - tc[0] * per) +
+               std::size_t(nb[0]) * std::size_t((c[1] - tc[1] * per) + nb[1] * (c[2] - tc[2] * per))] = 1;
+      }
+    for (char a : active) blocks_active += a;
+    MeshTile(field, o, geo, c0, c1, active, want_band, counters, results[std::size_t(ti)]);
+#pragma omp critical(quijibo_mesh_progress)
+    {
+      ++tiles_done;
+      progress.update(double(tiles_done), std::to_string(tiles_done) + " of " + std::to_string(tile_list.size()) + " tiles");
+    }
+  }
+  progress.finish();
+  tile_blocks = {};
+
+  // Merge: one vertex per edge id, sorted by id.
+  std::size_t total_refs = 0, total_tris = 0;
+  for (const auto& r : results) {
+    total_refs += r.vertex_edges.size();
+    total_tris += r.triangles.size();
+  }
+  std::vector<std::int64_t> edges;
+  edges.reserve(total_refs);
+  for (const auto& r : results) edges.insert(edges.end(), r.vertex_edges.begin(), r.vertex_edges.end());
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  edges.shrink_to_fit();
+  TriangleMesh mesh;
+  mesh.vertices.resize(edges.size());
+  mesh.triangles.resize(total_tris);
+  std::vector<std::size_t> tri_offset(results.size() + 1, 0);
+  for (std::size_t r = 0; r < results.size(); ++r) tri_offset[r + 1] = tri_offset[r] + results[r].triangles.size();
+#pragma omp parallel for schedule(dynamic)
+  for (std::int64_t ri = 0; ri < std::int64_t(results.size()); ++ri) {
+    TileResult& r = results[std::size_t(ri)];
+    std::vector<int> global(r.vertex_edges.size());
+    for (std::size_t v = 0; v < r.vertex_edges.size(); ++v) {
+      const std::size_t g = std::size_t(std::lower_bound(edges.begin(), edges.end(), r.vertex_edges[v]) - edges.begin());
+      global[v] = int(g);
+      mesh.vertices[g] = r.vertex_positions[v];  // identical from every tile that has it
+    }
+    std::size_t at = tri_offset[std::size_t(ri)];
+    for (const auto& t : r.triangles) mesh.triangles[at++] = {global[t[0]], global[t[1]], global[t[2]]};
+    r.vertex_edges = {};
+    r.vertex_positions = {};
+    r.triangles = {};
+  }
+  if (band) {
+    band->lattice = geo.lattice;
+    band->nodes.clear();
+    band->values.clear();
+    for (auto& r : results) {
+      band->nodes.insert(band->nodes.end(), r.band_nodes.begin(), r.band_nodes.end());
+      band->values.insert(band->values.end(), r.band_values.begin(), r.band_values.end());
+      r.band_nodes = {};
+      r.band_values = {};
+    }
+  }
+  if (summary) {
+    MeshingSummary& s = *summary;
+    s.nodes_evaluated = counters.nodes;
+    s.bisection_evaluations = counters.bisection;
+    s.non_finite_values = counters.non_finite;
+    s.search_evaluations = search_evaluations;
+    s.tiles_total = tiles_total;
+    s.tiles_meshed = std::int64_t(tile_list.size());
+    s.blocks_total = blocks.count[0] * blocks.count[1] * blocks.count[2];
+    s.blocks_active = blocks_active;
+    s.vertices = std::int64_t(mesh.vertices.size());
+    s.triangles = std::int64_t(mesh.triangles.size());
+    s.cells = geo.lattice.cells;
+    s.search_stride = sparse ? stride : 0;
+    s.spacing = geo.lattice.spacing;
+    s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  return mesh;
+}
+
+}  // namespace quijibo

@@ -1,0 +1,192 @@
+#include "mesh/pictures.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "quijibo/error.h"
+
+namespace quijibo {
+
+std::string SliceView::validate() const {
+  if (axis < 0 || axis > 2) return "slice axis must be x, y or z";
+  if (size < 8 || size > 16384) return "picture size must be in [8, 16384]";
+  for (int a = 0; a < 3; ++a)
+    if (!(max_corner[a] > min_corner[a]) || !std::isfinite(min_corner[a]) || !std::isfinite(max_corner[a]))
+      return "picture box must be finite with max > min";
+  if (!std::isfinite(at)) return "slice position must be finite";
+  return {};
+}
+
+int SliceView::width() const {
+  const double w = max_corner[u()] - min_corner[u()], h = max_corner[v()] - min_corner[v()];
+  return w >= h ? size : std::max(1, int(std::lround(size * w / h)));
+}
+int SliceView::height() const {
+  const double w = max_corner[u()] - min_corner[u()], h = max_corner[v()] - min_corner[v()];
+  return h >= w ? size : std::max(1, int(std::lround(size * h / w)));
+}
+Vec3 SliceView::point(int px, int py) const {
+  Vec3 p{};
+  p[axis] = at;
+  p[u()] = min_corner[u()] + (max_corner[u()] - min_corner[u()]) * (px + 0.5) / width();
+  p[v()] = max_corner[v()] - (max_corner[v()] - min_corner[v()]) * (py + 0.5) / height();
+  return p;
+}
+
+double SliceAgreement::agreement() const {
+  const double n = double(both_inside + both_outside + julia_only + target_only);
+  return n > 0 ? double(both_inside + both_outside) / n : 0.0;
+}
+
+namespace {
+
+// Evaluates the field on every pixel (rows in parallel).
+std::vector<double> EvaluateView(const BatchField& field, const SliceView& view) {
+  const int w = view.width(), h = view.height();
+  std::vector<double> values(std::size_t(w) * h);
+#pragma omp parallel for schedule(dynamic)
+  for (int y = 0; y < h; ++y) {
+    std::vector<Vec3> row(static_cast<std::size_t>(w));
+    for (int x = 0; x < w; ++x) row[std::size_t(x)] = view.point(x, y);
+    field.evaluate(row.data(), row.size(), values.data() + std::size_t(y) * w);
+  }
+  return values;
+}
+
+}  // namespace
+
+Image SliceAgainstTarget(const BatchField& field, const ScalarGrid& target, const SliceView& view,
+                         SliceAgreement* agreement) {
+  if (auto why = view.validate(); !why.empty()) throw Error("picture: " + why);
+  const int w = view.width(), h = view.height();
+  const std::vector<double> f = EvaluateView(field, view);
+  Image img(w, h);
+  SliceAgreement a;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool in_j = f[std::size_t(y) * w + x] < field.iso;
+      const bool in_t = target.sample(view.point(x, y)) < 0;
+      Rgb c;
+      if (in_j && in_t) c = kBothInside, ++a.both_inside;
+      else if (!in_j && !in_t) c = kBothOutside, ++a.both_outside;
+      else if (in_j) c = kJuliaOnly, ++a.julia_only;
+      else c = kTargetOnly, ++a.target_only;
+      img.at(x, y) = c;
+    }
+  if (agreement) *agreement = a;
+  return img;
+}
+
+Image ModulusVersorSlice(const RationalMap& map, const JuliaOptions& options, const SliceView& view,
+                         double modulus_scale, double iso) {
+  if (auto why = view.validate(); !why.empty()) throw Error("picture: " + why);
+  if (!(modulus_scale >= 0) || !std::isfinite(modulus_scale)) throw Error("picture: modulus scale must be >= 0");
+  const JuliaMap<double> jm(map, options);
+  const int w = view.width(), h = view.height();
+  std::vector<double> L(std::size_t(w) * h);
+  std::vector<JuliaResult<double>> results(L.size());
+#pragma omp parallel for schedule(dynamic)
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) results[std::size_t(y) * w + x] = jm.At(view.point(x, y));
+  if (modulus_scale == 0) {  // automatic: half the 90th percentile of |log|q_n| - iso|
+    std::vector<double> a;
+    for (const auto& r : results)
+      if (std::isfinite(r.log_modulus)) a.push_back(std::abs(r.log_modulus - iso));
+    modulus_scale = 1.0;
+    if (!a.empty()) {
+      std::nth_element(a.begin(), a.begin() + std::ptrdiff_t(0.9 * double(a.size() - 1)), a.end());
+      modulus_scale = std::max(1e-3, 0.5 * a[std::size_t(0.9 * double(a.size() - 1))]);
+    }
+  }
+  Image img(2 * w + 8, h, Rgb{255, 255, 255});
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const JuliaResult<double>& r = results[std::size_t(y) * w + x];
+      L[std::size_t(y) * w + x] = r.log_modulus;
+      const double g = std::isfinite(r.log_modulus) ? 0.5 + 0.5 * std::tanh((r.log_modulus - iso) / modulus_scale)
+                                                     : (r.log_modulus < 0 ? 0.0 : 1.0);
+      const auto grey = std::uint8_t(std::lround(255 * std::clamp(g, 0.0, 1.0)));
+      img.at(x, y) = {grey, grey, grey};
+      auto channel = [](double c) { return std::uint8_t(std::lround(127.5 * (1.0 + std::clamp(c, -1.0, 1.0)))); };
+      img.at(w + 8 + x, y) = {channel(r.versor.x), channel(r.versor.y), channel(r.versor.z)};
+    }
+  // The iso line on the modulus panel.
+  for (int y = 0; y + 1 < h; ++y)
+    for (int x = 0; x + 1 < w; ++x) {
+      const bool in = L[std::size_t(y) * w + x] < iso;
+      if (in != (L[std::size_t(y) * w + x + 1] < iso) || in != (L[std::size_t(y + 1) * w + x] < iso))
+        img.at(x, y) = {220, 30, 30};
+    }
+  return img;
+}
+
+Image RenderMesh(const TriangleMesh& mesh, int size, int views) {
+  if (size < 16 || size > 8192) throw Error("render: size must be in [16, 8192]");
+  if (views < 1 || views > 4) throw Error("render: views must be 1 to 4");
+  if (mesh.triangles.empty()) throw Error("render: the mesh has no triangles");
+  const BoundingBox box = ComputeBoundingBox(mesh);
+  const Vec3 c{(box.min[0] + box.max[0]) / 2, (box.min[1] + box.max[1]) / 2, (box.min[2] + box.max[2]) / 2};
+  double radius = 0;
+  for (const Vec3& p : mesh.vertices)
+    radius = std::max(radius, std::hypot(p[0] - c[0], p[1] - c[1], p[2] - c[2]));
+  if (!(radius > 0)) radius = 1;
+  // (azimuth, elevation) in degrees: camera direction from the centre.
+  const double cams[4][2] = {{0, 0}, {90, 0}, {0, 89.9}, {35, 25}};
+  Image img(size * views, size, Rgb{255, 255, 255});
+  for (int view = 0; view < views; ++view) {
+    const double az = cams[view][0] * M_PI / 180, el = cams[view][1] * M_PI / 180;
+    const Vec3 back{std::sin(az) * std::cos(el), std::sin(el), std::cos(az) * std::cos(el)};  // towards camera
+    Vec3 right{std::cos(az), 0, -std::sin(az)};
+    const Vec3 up{back[1] * right[2] - back[2] * right[1], back[2] * right[0] - back[0] * right[2],
+                  back[0] * right[1] - back[1] * right[0]};
+    auto dot = [](const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+    const double scale = 0.47 * size / radius;
+    std::vector<std::array<double, 3>> s(mesh.vertices.size());
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const Vec3 d{mesh.vertices[i][0] - c[0], mesh.vertices[i][1] - c[1], mesh.vertices[i][2] - c[2]};
+      s[i] = {size / 2.0 + scale * dot(d, right), size / 2.0 - scale * dot(d, up), dot(d, back)};
+    }
+    std::vector<double> depth(std::size_t(size) * size, -std::numeric_limits<double>::infinity());
+    Vec3 light{-0.4 * right[0] + 0.6 * up[0] + back[0], -0.4 * right[1] + 0.6 * up[1] + back[1],
+               -0.4 * right[2] + 0.6 * up[2] + back[2]};
+    const double ln = std::sqrt(dot(light, light));
+    for (double& l : light) l /= ln;
+    for (const auto& t : mesh.triangles) {
+      const Vec3 &A = mesh.vertices[t[0]], &B = mesh.vertices[t[1]], &C = mesh.vertices[t[2]];
+      const Vec3 e1{B[0] - A[0], B[1] - A[1], B[2] - A[2]}, e2{C[0] - A[0], C[1] - A[1], C[2] - A[2]};
+      Vec3 n{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      const double nn = std::sqrt(dot(n, n));
+      if (!(nn > 0)) continue;
+      for (double& x : n) x /= nn;
+      const bool front = dot(n, back) >= 0;
+      const double lambert = std::abs(dot(n, light));
+      const double k = 0.18 + 0.82 * lambert;
+      const Rgb colour = front ? Rgb{std::uint8_t(225 * k), std::uint8_t(205 * k), std::uint8_t(170 * k)}
+                               : Rgb{std::uint8_t(120 * k), std::uint8_t(140 * k), std::uint8_t(200 * k)};
+      const auto &a = s[t[0]], &b = s[t[1]], &cc = s[t[2]];
+      const double area = (b[0] - a[0]) * (cc[1] - a[1]) - (b[1] - a[1]) * (cc[0] - a[0]);
+      if (area == 0) continue;
+      const int x0 = std::max(0, int(std::floor(std::min({a[0], b[0], cc[0]}))));
+      const int x1 = std::min(size - 1, int(std::ceil(std::max({a[0], b[0], cc[0]}))));
+      const int y0 = std::max(0, int(std::floor(std::min({a[1], b[1], cc[1]}))));
+      const int y1 = std::min(size - 1, int(std::ceil(std::max({a[1], b[1], cc[1]}))));
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const double px = x + 0.5, py = y + 0.5;
+          const double w0 = ((b[0] - px) * (cc[1] - py) - (b[1] - py) * (cc[0] - px)) / area;
+          const double w1 = ((cc[0] - px) * (a[1] - py) - (cc[1] - py) * (a[0] - px)) / area;
+          const double w2 = 1 - w0 - w1;
+          if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+          const double z = w0 * a[2] + w1 * b[2] + w2 * cc[2];
+          double& d = depth[std::size_t(y) * size + x];
+          if (z <= d) continue;
+          d = z;
+          img.at(view * size + x, y) = colour;
+        }
+    }
+  }
+  return img;
+}
+
+}  // namespace quijibo

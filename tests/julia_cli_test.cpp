@@ -1,0 +1,93 @@
+// `quijibo mesh` and `quijibo picture` as a user meets them: outputs, one-line errors, no partial
+// output on bad input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+namespace quijibo {
+namespace {
+
+struct CommandRun {
+  int code;
+  std::string out;
+};
+
+CommandRun Quijibo(const std::string& args) {
+  const std::string cmd = std::string(QUIJIBO_BINARY) + " --quiet " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+class JuliaCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("quijibo_julia_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+    ASSERT_EQ(Quijibo("map random --top 6 --bottom 4 --seed 3 --center-on sphere --target-resolution 12 -o " +
+                      Path("map.json"))
+                  .code,
+              0);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  bool Exists(const std::string& name) const { return std::filesystem::exists(Path(name)); }
+  std::filesystem::path dir_;
+};
+
+TEST_F(JuliaCli, MeshWritesPlyObjVdbAndASummary) {
+  const CommandRun r = Quijibo("mesh " + Path("map.json") + " -o " + Path("m.ply") + " --obj " + Path("m.obj") +
+                        " --vdb " + Path("m.vdb") + " -r 24 -n 2 --frame fractal");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["triangles"].get<int>(), 10);
+  EXPECT_EQ(j["evaluations"]["non_finite"].get<int>(), 0);
+  EXPECT_TRUE(Exists("m.ply") && Exists("m.obj") && Exists("m.vdb"));
+  const CommandRun p = Quijibo("picture render " + Path("m.ply") + " -o " + Path("r.png") + " --size 64 --views 2");
+  EXPECT_EQ(p.code, 0) << p.out;
+  EXPECT_TRUE(Exists("r.png"));
+  const CommandRun f = Quijibo("picture field " + Path("map.json") + " -o " + Path("f.png") + " --size 32 --axis y");
+  EXPECT_EQ(f.code, 0) << f.out;
+  ASSERT_EQ(Quijibo("target sphere -r 16 -o " + Path("t.qgrid")).code, 0);
+  const CommandRun s = Quijibo("picture slice " + Path("map.json") + " --target " + Path("t.qgrid") + " -o " +
+                        Path("s.png") + " --size 32 -n 1");
+  ASSERT_EQ(s.code, 0) << s.out;
+  const double agreement = nlohmann::json::parse(s.out)["agreement"].get<double>();
+  EXPECT_GT(agreement, 0.0);
+  EXPECT_LE(agreement, 1.0);
+}
+
+TEST_F(JuliaCli, BadInputFailsWithOneLineAndNoOutput) {
+  struct Case {
+    std::string args, expect;
+  };
+  const std::vector<Case> cases = {
+      {"mesh " + Path("missing.json") + " -o " + Path("a.ply"), "missing.json"},
+      {"mesh " + Path("map.json") + " -o " + Path("a.stl"), "must end in"},
+      {"mesh " + Path("map.json") + " -o " + Path("a.ply") + " --box 1,1,1,0,2,2", "--box"},
+      {"mesh " + Path("map.json") + " -o " + Path("a.ply") + " --rotate 0,0,0,10", "rotation"},
+      {"mesh " + Path("map.json") + " -o " + Path("a.ply") + " --escape 0.5", "escape"},
+      {"mesh " + Path("map.json") + " -o " + Path("a.ply") + " --tile 31", "tile"},
+      {"mesh " + Path("map.json") + " -o " + Path("a.ply") + " --precision octuple", "octuple"},
+      {"mesh " + Path("map.json") + " -o " + Path("nofolder/a.ply"), "does not exist"},
+      {"picture render " + Path("map.json") + " -o " + Path("a.png"), "map.json"},
+  };
+  for (const Case& c : cases) {
+    const CommandRun r = Quijibo(c.args);
+    EXPECT_NE(r.code, 0) << c.args;
+    EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.args << " -> " << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+  }
+  EXPECT_FALSE(Exists("a.ply") || Exists("a.stl") || Exists("a.png"));
+}
+
+}  // namespace
+}  // namespace quijibo

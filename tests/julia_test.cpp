@@ -1,0 +1,183 @@
+// Iterating the map: log-polar form against the paper's direct products in float128, the
+// one-application identity, escape, root translation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "quijibo/error.h"
+#include "quijibo/julia.h"
+#include "quijibo/rational_map.h"
+
+namespace quijibo {
+namespace {
+
+RationalMap SmallMap(std::uint64_t seed = 3) {
+  RandomMapOptions o;
+  o.top = 12;
+  o.bottom = 9;
+  o.root_radius = 1.2;
+  o.exponent_min = 0.3;
+  o.exponent_max = 1.2;
+  o.seed = seed;
+  RationalMap m = RandomMap(o);
+  m.tau = 1.1;
+  m.beta = 0.9;
+  m.ln_C = -0.4;
+  return m;
+}
+
+std::vector<Vec3> Points(int n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<Vec3> p(n);
+  for (auto& x : p)
+    for (double& c : x) c = -2.0 + 4.0 * double(rng() >> 11) / double(1ull << 53);
+  return p;
+}
+
+// Acceptance criterion of issue 5: log-polar double iteration vs float128 (direct quaternion
+// products) within 1e-9 relative on the points that do not escape.
+TEST(Julia, LogPolarDoubleMatchesFloat128) {
+  const RationalMap map = SmallMap();
+  JuliaOptions o;
+  o.iterations = 4;
+  const JuliaMap<double> d(map, o);
+  const JuliaMap<float128> q(map, o);
+  int compared = 0, escaped = 0;
+  double worst = 0;
+  for (const Vec3& p : Points(1500, 7)) {
+    const auto rq = q.IterateDirect(q.StartingPoint(p));
+    const auto rd = d.Iterate(d.StartingPoint(p));
+    if (rq.escaped || rd.escaped) {
+      ++escaped;
+      continue;
+    }
+    ASSERT_EQ(rq.iterations, rd.iterations);
+    const double ref = ToDouble(rq.log_modulus);
+    const double err = std::abs(rd.log_modulus - ref) / std::max(1.0, std::abs(ref));
+    worst = std::max(worst, err);
+    const double dv = std::abs(rd.versor.w - ToDouble(rq.versor.w)) + std::abs(rd.versor.x - ToDouble(rq.versor.x)) +
+                      std::abs(rd.versor.y - ToDouble(rq.versor.y)) + std::abs(rd.versor.z - ToDouble(rq.versor.z));
+    EXPECT_LT(dv, 1e-8);
+    ++compared;
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_GT(compared, 200);  // the test means something: both kinds of points occur
+  EXPECT_GT(escaped, 200);
+}
+
+TEST(Julia, LogPolarAndDirectAgreeInFloat128) {
+  const RationalMap map = SmallMap(5);
+  JuliaOptions o;
+  o.iterations = 3;
+  const JuliaMap<float128> q(map, o);
+  for (const Vec3& p : Points(200, 9)) {
+    const auto a = q.Iterate(q.StartingPoint(p));
+    const auto b = q.IterateDirect(q.StartingPoint(p));
+    EXPECT_EQ(a.escaped, b.escaped);
+    if (a.escaped) continue;
+    EXPECT_NEAR(ToDouble(a.log_modulus), ToDouble(b.log_modulus), 1e-20 * std::max(1.0, std::abs(ToDouble(b.log_modulus))));
+  }
+}
+
+// One application: log|R(q)| = ln C + tau sum T_i log|q - t_i| - beta sum B_i log|q - b_i|, the
+// quantity the energies fit.
+TEST(Julia, OneApplicationIsTheLogLinearSum) {
+  const RationalMap map = SmallMap();
+  JuliaOptions o;
+  o.iterations = 1;
+  o.slice = 0.3;
+  const JuliaMap<double> d(map, o);
+  for (const Vec3& p : Points(50, 11)) {
+    double L = map.ln_C;
+    auto dist = [&](const Vec4& r) {
+      return 0.5 * std::log((p[0] - r[0]) * (p[0] - r[0]) + (p[1] - r[1]) * (p[1] - r[1]) +
+                            (p[2] - r[2]) * (p[2] - r[2]) + (0.3 - r[3]) * (0.3 - r[3]));
+    };
+    for (int i = 0; i < map.top_count(); ++i) L += map.tau * map.top_exponents[i] * dist(map.top_roots[i]);
+    for (int i = 0; i < map.bottom_count(); ++i) L -= map.beta * map.bottom_exponents[i] * dist(map.bottom_roots[i]);
+    const auto r = d.At(p);
+    EXPECT_NEAR(r.log_modulus, L, 1e-12 * std::max(1.0, std::abs(L)));
+    EXPECT_NEAR(r.versor.norm(), 1.0, 1e-14);
+    EXPECT_EQ(r.iterations, 1);
+  }
+}
+
+// The reference's zero roots (top and bottom at the origin): an iterate at or underflowing to 0
+// keeps a finite log-modulus (no inf - inf).
+TEST(Julia, ZeroRootsGiveFiniteValues) {
+  RandomMapOptions ro;
+  ro.top = 6;
+  ro.bottom = 5;
+  ro.leading_zero_roots = true;
+  RationalMap map = RandomMap(ro);
+  map.tau = 1.3;
+  map.beta = 0.7;
+  JuliaOptions o;
+  o.iterations = 6;
+  const JuliaMap<double> d(map, o);
+  EXPECT_TRUE(std::isfinite(d.At({0, 0, 0}).log_modulus) || d.At({0, 0, 0}).log_modulus < 0);
+  Quaternion<double> u(1, 0, 0, 0);
+  double L = 0;
+  d.Apply(Quaternion<double>(), -1e6, u, L, u);  // |q| = e^-1e6: underflows in double
+  EXPECT_TRUE(std::isfinite(L));
+  int bad = 0;
+  for (const Vec3& p : Points(500, 17)) bad += std::isnan(d.At(p).log_modulus);
+  EXPECT_EQ(bad, 0);
+}
+
+TEST(Julia, EscapeStopsTheIteration) {
+  RationalMap map = SmallMap();
+  map.ln_C = 12.0;  // everything is thrown out at once
+  JuliaOptions o;
+  o.iterations = 5;
+  const JuliaMap<double> d(map, o);
+  const auto r = d.At({0.1, 0.2, 0.3});
+  EXPECT_TRUE(r.escaped);
+  EXPECT_EQ(r.iterations, 1);
+  EXPECT_GE(r.log_modulus, std::log(2000.0));
+}
+
+TEST(Julia, RootTranslationChangesNothingForOneIteration) {
+  const RationalMap map = SmallMap();
+  JuliaOptions o;
+  o.iterations = 1;
+  const JuliaMap<double> a(map, o);
+  o.root_translation = {0, 0, 1.41, 0};
+  const JuliaMap<double> b(map, o);
+  o.iterations = 3;
+  const JuliaMap<double> c(map, o);
+  o.root_translation = {0, 0, 0, 0};
+  const JuliaMap<double> c0(map, o);
+  int differ = 0;
+  for (const Vec3& p : Points(100, 13)) {
+    EXPECT_NEAR(a.At(p).log_modulus, b.At(p).log_modulus, 1e-10);
+    differ += std::abs(c.At(p).log_modulus - c0.At(p).log_modulus) > 1e-6;
+  }
+  EXPECT_GT(differ, 10);
+}
+
+TEST(Julia, RotationIsRigid) {
+  const SampleTransform t = SampleTransform::AxisAngle({0, 0, 2}, 90, {1, 0, 0});
+  const Vec3 w = t.apply({2, 0, 0});
+  EXPECT_NEAR(w[0], 1, 1e-15);
+  EXPECT_NEAR(w[1], 1, 1e-15);
+  EXPECT_NEAR(w[2], 0, 1e-15);
+  EXPECT_THROW(SampleTransform::AxisAngle({0, 0, 0}, 10, {0, 0, 0}), Error);
+}
+
+TEST(Julia, InvalidOptionsThrow) {
+  const RationalMap map = SmallMap();
+  JuliaOptions o;
+  o.iterations = 0;
+  EXPECT_THROW(JuliaMap<double>(map, o), Error);
+  o = {};
+  o.escape_radius = 0.5;
+  EXPECT_THROW(JuliaMap<double>(map, o), Error);
+  o = {};
+  o.root_scale = 0;
+  EXPECT_THROW(JuliaMap<double>(map, o), Error);
+}
+
+}  // namespace
+}  // namespace quijibo

@@ -1,0 +1,112 @@
+// Meshing a real Julia set: dense = sparse, thread-count independence, no NaN, manifold.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <set>
+
+#include "mesh/julia_field.h"
+#include "mesh/marching_cubes.h"
+#include "mesh/pictures.h"
+#include "quijibo/rational_map.h"
+
+namespace quijibo {
+namespace {
+
+// A small random map whose set at n = 1 contains the origin: ln C puts L(0) at -1.
+RationalMap SmallMap() {
+  RandomMapOptions o;
+  o.top = 12;
+  o.bottom = 9;
+  o.root_radius = 1.2;
+  o.exponent_min = 0.3;
+  o.exponent_max = 1.2;
+  o.seed = 4;
+  RationalMap m = RandomMap(o);
+  m.ln_C = 0;
+  JuliaOptions j;
+  j.iterations = 1;
+  m.ln_C = -1.0 - JuliaMap<double>(m, j).At({0, 0, 0}).log_modulus;
+  return m;
+}
+
+std::multiset<std::array<Vec3, 3>> Canonical(const TriangleMesh& m) {
+  std::multiset<std::array<Vec3, 3>> s;
+  for (const auto& t : m.triangles) {
+    std::array<Vec3, 3> p{m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]};
+    const int first = int(std::min_element(p.begin(), p.end()) - p.begin());
+    std::rotate(p.begin(), p.begin() + first, p.end());
+    s.insert(p);
+  }
+  return s;
+}
+
+TEST(JuliaMesh, DenseAndSparseAgreeAndThreadsDoNotMatter) {
+  const RationalMap map = SmallMap();
+  JuliaOptions j;
+  j.iterations = 2;
+  JuliaFieldStats stats;
+  const BatchField field = MakeJuliaField(map, j, 0.0, Precision::kDouble, &stats);
+  MeshingOptions o;
+  o.resolution = 64;
+  o.tile_cells = 16;
+  o.search_min_cells = 16;  // a sparse search (stride 4) at this small resolution
+  MeshingSummary ss, sd;
+  const TriangleMesh sparse = MeshField(field, o, &ss);
+  ASSERT_GT(sparse.triangles.size(), 500u);
+  EXPECT_GT(ss.search_stride, 0);
+  EXPECT_LT(ss.nodes_evaluated, 65 * 65 * 65);
+  EXPECT_GT(stats.escaped.load(), 0);
+  o.sparse = false;
+  const TriangleMesh dense = MeshField(field, o, &sd);
+  EXPECT_EQ(sparse.triangles.size(), dense.triangles.size());
+  EXPECT_EQ(sparse.vertices, dense.vertices);
+  EXPECT_EQ(Canonical(sparse), Canonical(dense));
+  for (const Vec3& v : sparse.vertices)
+    for (double c : v) ASSERT_TRUE(std::isfinite(c));
+  const MeshTopology t = AnalyzeTopology(sparse);
+  EXPECT_EQ(t.non_manifold_edges, 0);
+  EXPECT_EQ(t.misoriented_edges, 0);
+  EXPECT_EQ(ss.non_finite_values, 0);
+
+  o.sparse = true;
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const TriangleMesh one = MeshField(field, o);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(one.vertices, sparse.vertices);
+  EXPECT_EQ(one.triangles, sparse.triangles);
+}
+
+TEST(JuliaMesh, PicturesHaveTheRightSizeAndColours) {
+  const RationalMap map = SmallMap();
+  JuliaOptions j;
+  j.iterations = 1;
+  SliceView v;
+  v.size = 64;
+  v.max_corner = {2, 1, 2};  // 4 x 3: 64 x 48 pixels on the x-y plane
+  const Image img = ModulusVersorSlice(map, j, v);
+  EXPECT_EQ(img.width, 2 * 64 + 8);
+  EXPECT_EQ(img.height, 48);
+  // Against a target: a ball of radius 0.3 at the origin inside the set gives both-inside pixels.
+  ScalarGrid target;
+  target.frame = GridFrame::Cube(16, {0, 0, 0}, 4.0);
+  target.values.resize(target.frame.cell_count());
+  for (std::int64_t c = 0; c < target.frame.cell_count(); ++c) {
+    const Vec3 p = target.frame.cell_center(c);
+    target.values[c] = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 0.3;
+  }
+  SliceAgreement a;
+  const Image s = SliceAgainstTarget(MakeJuliaField(map, j), target, v, &a);
+  EXPECT_EQ(s.width, 64);
+  EXPECT_GT(a.both_inside, 0);
+  EXPECT_EQ(a.both_inside + a.both_outside + a.julia_only + a.target_only, 64 * 48);
+  const Image r = RenderMesh(MeshField(MakeJuliaField(map, j), MeshingOptions{.resolution = 32}), 64, 3);
+  EXPECT_EQ(r.width, 192);
+  int shaded = 0;
+  for (const Rgb& p : r.pixels) shaded += !(p.r == 255 && p.g == 255 && p.b == 255);
+  EXPECT_GT(shaded, 100);
+}
+
+}  // namespace
+}  // namespace quijibo

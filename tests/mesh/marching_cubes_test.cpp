@@ -1,0 +1,221 @@
+// Marching cubes with bisection: closed manifold output, accuracy, dense = sparse, tile seams,
+// thread-count independence, PLY round trip.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "mesh/marching_cubes.h"
+#include "mesh/triangle_mesh.h"
+#include "mesh_fixtures.h"
+#include "quijibo/error.h"
+
+namespace quijibo {
+namespace {
+
+using testing::TempDir;
+
+BatchField Lambda(std::function<double(const Vec3&)> f, double iso = 0.0) {
+  BatchField field;
+  field.iso = iso;
+  field.evaluate = [f](const Vec3* p, std::size_t n, double* v) {
+    for (std::size_t i = 0; i < n; ++i) v[i] = f(p[i]);
+  };
+  return field;
+}
+
+double Norm(const Vec3& p) { return std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]); }
+
+BatchField Sphere(double r, Vec3 c = {0.1, -0.05, 0.03}) {
+  return Lambda([r, c](const Vec3& p) { return Norm({p[0] - c[0], p[1] - c[1], p[2] - c[2]}) - r; });
+}
+
+// A gyroid clipped by a ball: many ambiguous faces, several handles, closed.
+BatchField Gyroid() {
+  return Lambda([](const Vec3& p) {
+    const double g = std::sin(3 * p[0]) * std::cos(3 * p[1]) + std::sin(3 * p[1]) * std::cos(3 * p[2]) +
+                     std::sin(3 * p[2]) * std::cos(3 * p[0]);
+    return std::max(g + 0.2, Norm(p) - 1.6);
+  });
+}
+
+std::int64_t Euler(const TriangleMesh& m, const MeshTopology& t) {
+  return std::int64_t(m.vertices.size()) - t.edges + std::int64_t(m.triangles.size());
+}
+
+// The mesh as a set of triangles of positions (rotated so the smallest vertex comes first).
+std::multiset<std::array<Vec3, 3>> Canonical(const TriangleMesh& m) {
+  std::multiset<std::array<Vec3, 3>> s;
+  for (const auto& t : m.triangles) {
+    std::array<Vec3, 3> p{m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]};
+    const int first = int(std::min_element(p.begin(), p.end()) - p.begin());
+    std::rotate(p.begin(), p.begin() + first, p.end());
+    s.insert(p);
+  }
+  return s;
+}
+
+TEST(MarchingCubes, SphereIsClosedManifoldGenusZero) {
+  MeshingOptions o;
+  o.resolution = 48;
+  MeshingSummary s;
+  const TriangleMesh m = MeshField(Sphere(1.2), o, &s);
+  ASSERT_GT(m.triangles.size(), 1000u);
+  const MeshTopology t = AnalyzeTopology(m);
+  EXPECT_TRUE(t.closed());
+  EXPECT_EQ(t.boundary_edges, 0);
+  EXPECT_EQ(t.non_manifold_edges, 0);
+  EXPECT_EQ(t.misoriented_edges, 0);
+  EXPECT_EQ(Euler(m, t), 2);
+  EXPECT_NEAR(t.signed_volume, 4.0 / 3.0 * M_PI * std::pow(1.2, 3), 0.02);  // outward faces
+  // Bisection: 6 steps leave at most h / 64 along the edge.
+  double worst = 0;
+  for (const Vec3& v : m.vertices) worst = std::max(worst, std::abs(Norm({v[0] - 0.1, v[1] + 0.05, v[2] - 0.03}) - 1.2));
+  EXPECT_LT(worst, s.spacing / 64 * 1.01);
+  EXPECT_EQ(s.vertices, std::int64_t(m.vertices.size()));
+  EXPECT_EQ(s.non_finite_values, 0);
+  EXPECT_GT(s.bisection_evaluations, 0);
+  // No duplicate positions (vertices are shared between cells and tiles).
+  std::set<Vec3> unique(m.vertices.begin(), m.vertices.end());
+  EXPECT_EQ(unique.size(), m.vertices.size());
+}
+
+// A small resolution searches finely enough (here: dense) not to miss a ball that falls between
+// the nodes of the default 8-cell search lattice.
+TEST(MarchingCubes, SmallResolutionDoesNotMissTheSurface) {
+  MeshingOptions o;
+  o.resolution = 24;
+  MeshingSummary s;
+  const TriangleMesh m = MeshField(Sphere(1.0, {0, 0, 0}), o, &s);
+  EXPECT_GT(m.triangles.size(), 100u);
+  EXPECT_TRUE(AnalyzeTopology(m).closed());
+}
+
+TEST(MarchingCubes, MoreBisectionStepsAreMoreAccurate) {
+  MeshingOptions o;
+  o.resolution = 24;
+  o.bisection_steps = 20;
+  MeshingSummary s;
+  const TriangleMesh m = MeshField(Sphere(1.0, {0, 0, 0}), o, &s);
+  for (const Vec3& v : m.vertices) EXPECT_NEAR(Norm(v), 1.0, s.spacing * 2e-6);
+}
+
+TEST(MarchingCubes, GyroidIsClosedAndManifold) {
+  MeshingOptions o;
+  o.resolution = 64;
+  o.tile_cells = 16;
+  const TriangleMesh m = MeshField(Gyroid(), o);
+  const MeshTopology t = AnalyzeTopology(m);
+  EXPECT_EQ(t.boundary_edges, 0);
+  EXPECT_EQ(t.non_manifold_edges, 0);
+  EXPECT_EQ(t.misoriented_edges, 0);
+  EXPECT_GT(t.signed_volume, 0);
+  EXPECT_EQ(Euler(m, t) % 2, 0);
+}
+
+TEST(MarchingCubes, DenseAndSparseAgree) {
+  MeshingOptions o;
+  o.resolution = 64;
+  o.tile_cells = 16;
+  o.search_min_cells = 8;  // a sparse search at this small resolution
+  MeshingSummary ss, sd;
+  const TriangleMesh sparse = MeshField(Gyroid(), o, &ss);
+  o.sparse = false;
+  const TriangleMesh dense = MeshField(Gyroid(), o, &sd);
+  EXPECT_EQ(ss.search_stride, 8);
+  EXPECT_EQ(sd.search_stride, 0);
+  EXPECT_LT(ss.nodes_evaluated, sd.nodes_evaluated);
+  EXPECT_LT(ss.tiles_meshed, ss.tiles_total + 1);
+  EXPECT_EQ(sparse.vertices, dense.vertices);  // sorted by edge id in both
+  EXPECT_EQ(Canonical(sparse), Canonical(dense));
+}
+
+TEST(MarchingCubes, TileSizeAndThreadsDoNotChangeTheMesh) {
+  MeshingOptions o;
+  o.resolution = 50;  // not a multiple of the tiles: partial tiles at the far side
+  o.min_corner = {-1.9, -1.7, -1.8};
+  o.max_corner = {1.8, 1.9, 1.7};
+  o.tile_cells = 8;
+  o.search_min_cells = 4;
+  const TriangleMesh small = MeshField(Gyroid(), o);
+  o.tile_cells = 32;
+  const TriangleMesh large = MeshField(Gyroid(), o);
+  EXPECT_EQ(small.vertices, large.vertices);
+  EXPECT_EQ(Canonical(small), Canonical(large));
+  std::set<Vec3> unique(small.vertices.begin(), small.vertices.end());
+  EXPECT_EQ(unique.size(), small.vertices.size());
+
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const TriangleMesh one = MeshField(Gyroid(), o);
+  omp_set_num_threads(3);
+  const TriangleMesh three = MeshField(Gyroid(), o);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(one.vertices, large.vertices);
+  EXPECT_EQ(one.triangles, large.triangles);
+  EXPECT_EQ(three.vertices, large.vertices);
+  EXPECT_EQ(three.triangles, large.triangles);
+}
+
+TEST(MarchingCubes, NonFiniteValuesCountAsOutside) {
+  MeshingOptions o;
+  o.resolution = 32;
+  MeshingSummary s;
+  // NaN beyond x > 1: a ball of radius 1.5 cut there (open where the field is NaN).
+  const TriangleMesh m = MeshField(Lambda([](const Vec3& p) {
+                                     return p[0] > 1.0 ? std::nan("") : Norm(p) - 1.5;
+                                   }),
+                                   o, &s);
+  EXPECT_GT(s.non_finite_values, 0);
+  EXPECT_GT(m.triangles.size(), 100u);
+  for (const Vec3& v : m.vertices)
+    for (double c : v) EXPECT_TRUE(std::isfinite(c));
+  const MeshTopology t = AnalyzeTopology(m);
+  EXPECT_EQ(t.boundary_edges, 0);  // NaN is outside: the cap closes the ball
+  EXPECT_EQ(t.misoriented_edges, 0);
+}
+
+TEST(MarchingCubes, PlyRoundTrip) {
+  TempDir dir;
+  MeshingOptions o;
+  o.resolution = 24;
+  const TriangleMesh m = MeshField(Sphere(1.0), o);
+  WritePly(dir.file("s.ply"), m);  // float32: what viewers (and assimp) read
+  const TriangleMesh back = ReadMesh(dir.file("s.ply"));
+  EXPECT_EQ(back.triangles.size(), m.triangles.size());
+  EXPECT_EQ(back.vertices.size(), m.vertices.size());
+  const MeshTopology t = AnalyzeTopology(back);
+  EXPECT_TRUE(t.closed());
+  EXPECT_GT(t.signed_volume, 0);
+}
+
+TEST(MarchingCubes, BandHoldsTheSurfaceNodes) {
+  MeshingOptions o;
+  o.resolution = 32;
+  FieldBand band;
+  MeshField(Sphere(1.0), o, nullptr, &band);
+  ASSERT_FALSE(band.nodes.empty());
+  ASSERT_EQ(band.nodes.size(), band.values.size());
+  for (std::size_t i = 0; i < band.values.size(); ++i) EXPECT_LT(std::abs(band.values[i]), 2 * band.lattice.spacing);
+}
+
+TEST(MarchingCubes, InvalidOptionsThrow) {
+  MeshingOptions o;
+  o.resolution = 1;
+  EXPECT_THROW(MeshField(Sphere(1), o), Error);
+  o = {};
+  o.tile_cells = 31;
+  EXPECT_THROW(MeshField(Sphere(1), o), Error);
+  o = {};
+  o.max_corner[1] = o.min_corner[1];
+  EXPECT_THROW(MeshField(Sphere(1), o), Error);
+  o = {};
+  BatchField none;
+  EXPECT_THROW(MeshField(none, o), Error);
+}
+
+}  // namespace
+}  // namespace quijibo
