@@ -144,7 +144,7 @@ void AddModuleCommands(CLI::App& app) {
   m->add_option("--sampling-seed", a->monopole.sampling.seed, "Seed of the blue-noise sampling")->capture_default_str();
   m->add_option("--offset", a->monopole.shell.offset_cells, "Offset of the fitting shell, in cells")->capture_default_str();
   m->add_option("--bem-elements", a->monopole.bem.max_elements, "BEM elements (patches)")->capture_default_str();
-  m->add_option("--amplitude", a->guess.amplitude, "Exponent multiplier (reference: 3000)")->capture_default_str();
+  m->add_option("--amplitude", a->guess.amplitude, "Exponent multiplier (reference code: 3000, which saturates tanh with our fit; see docs/benchmarks.md)")->capture_default_str();
   m->add_flag("--no-zero-roots", [a](std::int64_t) { a->guess.leading_zero_roots = false; },
               "Leave out the reference's leading zero roots");
   m->add_option("--scan-resolution", a->guess.scan_resolution, "Grid of the ln C scan")->capture_default_str();

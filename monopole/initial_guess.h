@@ -1,7 +1,7 @@
 // From monopoles to the initial rational map (2015 paper §4.4 "Building the initial guess";
 // the reference code's conventions, quijibo-code.md §3.4 and §5.2 item 2):
 //   - a monopole of weight w > 0 becomes a top root with T_i = amplitude * w, one with w < 0 a
-//     bottom root with B_i = amplitude * |w| (reference amplitude 3000); weights are first put in
+//     bottom root with B_i = amplitude * |w| (default 50; reference 3000, see below); weights are first put in
 //     the normalized frame's units (divided by the fractal radius), as the reference fits there;
 //   - optionally the reference's leading zero roots: a root at the origin with exponent 1 first in
 //     top and in bottom (not amplified);
@@ -20,7 +20,11 @@
 namespace quijibo {
 
 struct InitialGuessOptions {
-  double amplitude = 3000.0;      // reference "initial bulk scalar amplitude"
+  // The "initial bulk scalar amplitude". The reference runs 3000 (its cfg comments: 50 "reliable",
+  // 2000 "best"); with our fit, 1000 and above leave L = log|R| so steep that tanh saturates in
+  // nearly every cell and the F pass has no gradient to follow (measured in docs/benchmarks.md),
+  // so the default is the reference's "reliable" 50.
+  double amplitude = 50.0;
   bool leading_zero_roots = true;  // reference: on
   int scan_resolution = 25;        // grid of the ln C scan (reference: 25)
   double alpha = 10.0;
