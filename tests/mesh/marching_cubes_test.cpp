@@ -10,6 +10,7 @@
 
 #include "mesh/marching_cubes.h"
 #include "mesh/triangle_mesh.h"
+#include "mesh/vdb.h"
 #include "mesh_fixtures.h"
 #include "quijibo/error.h"
 
@@ -200,6 +201,14 @@ TEST(MarchingCubes, BandHoldsTheSurfaceNodes) {
   ASSERT_FALSE(band.nodes.empty());
   ASSERT_EQ(band.nodes.size(), band.values.size());
   for (std::size_t i = 0; i < band.values.size(); ++i) EXPECT_LT(std::abs(band.values[i]), 2 * band.lattice.spacing);
+  // Through OpenVDB and back: voxel (i, j, k) is node (i, j, k).
+  TempDir dir;
+  WriteVdbSparse(dir.file("b.vdb"), band.lattice.origin, band.lattice.spacing, band.nodes, band.values, 1e30f, 0.0,
+                 "julia", "test", "fractal");
+  const ScalarGrid back = ReadVdb(dir.file("b.vdb"));
+  EXPECT_NEAR(back.frame.spacing, band.lattice.spacing, 1e-12);
+  const Vec3 node = band.lattice.node(band.nodes[0][0], band.nodes[0][1], band.nodes[0][2]);
+  EXPECT_NEAR(back.sample(node), band.values[0], 1e-6);
 }
 
 TEST(MarchingCubes, InvalidOptionsThrow) {
