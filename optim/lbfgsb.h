@@ -46,7 +46,8 @@ struct LbfgsbResult {
   int evaluations = 0;
   Scalar f = 0;
   Scalar projected_gradient = 0;
-  std::string message;  // the line search's complaint, if any
+  std::string message;  // the line search's complaint when it stopped the pass
+  int line_search_restarts = 0;  // failures recovered by resetting the memory
 };
 
 // Minimizes f over lb <= x <= ub starting from x (projected onto the box first).
@@ -137,11 +138,13 @@ LbfgsbResult<Scalar> MinimizeBounded(
       result.message = e.what();
       if (retried) return finish(StopReason::kLineSearch);
       retried = true;
+      ++result.line_search_restarts;
       bfgs.reset(n, options.memory);
       direction(true);
       continue;
     }
     retried = false;
+    result.message.clear();  // recovered: only a failure that stops the pass is reported
     ++result.iterations;
     pg = projected_norm(x, grad);
     if (!finite(fx) || !grad.allFinite()) return finish(StopReason::kNonFinite);

@@ -52,7 +52,8 @@ json PassSummary::ToJson() const {
           {"pass", std::string(1, kind)}, {"stop", stop}, {"iterations", iterations},
           {"evaluations", evaluations}, {"seconds", seconds}, {"energy_start", energy_start},
           {"energy_end", energy_end}, {"absolute_end", absolute_end},
-          {"overflowed_cells", overflowed_cells}, {"message", message}};
+          {"overflowed_cells", overflowed_cells}, {"message", message},
+          {"line_search_restarts", line_search_restarts}};
 }
 
 PassSummary PassSummary::FromJson(const json& j) {
@@ -70,6 +71,7 @@ PassSummary PassSummary::FromJson(const json& j) {
   p.absolute_end = j.at("absolute_end");
   p.overflowed_cells = j.at("overflowed_cells");
   p.message = j.value("message", "");
+  p.line_search_restarts = j.value("line_search_restarts", 0);
   return p;
 }
 
@@ -425,6 +427,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       }
       ps.stop = StopReasonName(res.stop);
       ps.message = res.message;
+      ps.line_search_restarts = res.line_search_restarts;
       ps.iterations = res.iterations;
       ps.evaluations = res.evaluations;
       ps.energy_end = ToDouble(res.f);

@@ -52,6 +52,7 @@ struct PassSummary {
   double seconds = 0, energy_start = 0, energy_end = 0, absolute_end = 0;
   long long overflowed_cells = 0;  // largest count seen in one evaluation (cached evaluator)
   std::string message;
+  int line_search_restarts = 0;  // line-search failures recovered by resetting the L-BFGS memory
   nlohmann::json ToJson() const;
   static PassSummary FromJson(const nlohmann::json& j);
 };
