@@ -3,8 +3,11 @@
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
+#include <functional>
 #include <string>
 
+#include "mesh/julia_field.h"
+#include "mesh/marching_cubes.h"
 #include "quijibo/energy.h"
 #include "quijibo/grid.h"
 #include "quijibo/loglinear_energy.h"
@@ -21,6 +24,13 @@ void AddOptimizeCommand(CLI::App& app);
 void AddModuleCommands(CLI::App& app);  // sdf, monopoles
 void AddModulusCommands(CLI::App& app);  // modulus, portal, compare, bench modulus (after AddBenchCommand)
 void AddJuliaCommands(CLI::App& app);   // mesh, picture, bench mesh (after AddBenchCommand)
+
+// `quijibo mesh` with another mesher (quijibo-mpi, docs/mpi.md). The mesher meshes exactly like
+// MeshField (mesh, summary, band when not null) and returns false on processes that must not write
+// (MPI workers); it may add other processes' counts into `stats`.
+using Mesher = std::function<bool(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary,
+                                  FieldBand* band, TriangleMesh* mesh, JuliaFieldStats* stats)>;
+void AddMeshCommand(CLI::App& app, const Mesher& mesher);
 
 // A target given on the command line: a .qgrid file, or an analytic shape ("sphere",
 // "torus:major=1,minor=0.3") sampled on the default target box (frame.h, TargetGridFrame)

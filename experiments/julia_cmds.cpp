@@ -135,8 +135,14 @@ struct MeshRun {
   std::int64_t escaped = 0, non_finite = 0;
 };
 
-// Everything `quijibo mesh` computes, before writing.
-MeshRun RunMesh(MeshArgs& a, const RationalMap& map, bool want_band) {
+bool LocalMesher(const BatchField& field, const MeshingOptions& o, MeshingSummary* summary, FieldBand* band,
+                 TriangleMesh* mesh, JuliaFieldStats*) {
+  *mesh = MeshField(field, o, summary, band);
+  return true;
+}
+
+// Everything `quijibo mesh` computes, before writing; false on processes that do not write.
+bool RunMesh(MeshArgs& a, const RationalMap& map, bool want_band, const Mesher& mesher, MeshRun& run) {
   MeshingOptions& o = a.meshing;
   const double half = map.frame.fractal_radius / 2;
   o.min_corner = {-half, -half, -half};
@@ -148,10 +154,15 @@ MeshRun RunMesh(MeshArgs& a, const RationalMap& map, bool want_band) {
               (o.min_corner[2] + o.max_corner[2]) / 2});
   JuliaFieldStats stats;
   const BatchField field = MakeJuliaField(map, a.j.julia, a.j.iso, ParsePrecision(a.j.precision), &stats);
-  MeshRun run;
-  run.mesh = MeshField(field, o, &run.summary, want_band ? &run.band : nullptr);
+  const bool writer = mesher(field, o, &run.summary, want_band ? &run.band : nullptr, &run.mesh, &stats);
   run.escaped = stats.escaped;
   run.non_finite = stats.non_finite;
+  return writer;
+}
+
+MeshRun RunMesh(MeshArgs& a, const RationalMap& map, bool want_band) {
+  MeshRun run;
+  RunMesh(a, map, want_band, LocalMesher, run);
   return run;
 }
 
@@ -164,7 +175,7 @@ void PlaceVertices(TriangleMesh& mesh, const JuliaOptions& julia, const FractalF
   }
 }
 
-void AddMesh(CLI::App& app) {
+void AddMesh(CLI::App& app, const Mesher& mesher) {
   auto a = std::make_shared<MeshArgs>();
   CLI::App* c = app.add_subcommand(
       "mesh", "Mesh the Julia set {log|q_n| < iso} of a map by marching cubes with bisection (PLY/OBJ, .vdb)");
@@ -190,13 +201,14 @@ void AddMesh(CLI::App& app) {
   c->add_flag("--ply-double", a->ply_double, "PLY coordinates as double (default float)");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
   a->j.add(c);
-  c->callback([a] {
+  c->callback([a, mesher] {
     CheckOutput(a->out, {".ply", ".obj"}, "the mesh");
     CheckOutput(a->obj, {".obj"}, "--obj");
     CheckOutput(a->vdb, {".vdb"}, "--vdb");
     const RationalMap map = ReadMap(a->map);
     a->meshing.show_progress = true;
-    MeshRun run = RunMesh(*a, map, !a->vdb.empty());
+    MeshRun run;
+    if (!RunMesh(*a, map, !a->vdb.empty(), mesher, run)) return;
     if (run.mesh.triangles.empty())
       throw Error(a->map + ": the surface log|q_n| = " + std::to_string(a->j.iso) +
                   " does not cross the box (no triangles); nothing written");
@@ -434,8 +446,10 @@ void AddBenchMesh(CLI::App& app) {
 
 }  // namespace
 
+void AddMeshCommand(CLI::App& app, const Mesher& mesher) { AddMesh(app, mesher); }
+
 void AddJuliaCommands(CLI::App& app) {
-  AddMesh(app);
+  AddMesh(app, LocalMesher);
   AddPicture(app);
   AddBenchMesh(app);
 }

@@ -202,7 +202,7 @@ BlockGrid MakeBlocks(const MeshLattice& l, int stride) {
 
 // The sparse search: returns the sorted ids of the active blocks of `block_cells`.
 std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOptions& o, int first_stride,
-                                       const Geometry& geo, Counters& counters) {
+                                       const Geometry& geo, Counters& counters, const PointsEvaluator& external) {
   const MeshLattice& l = geo.lattice;
   std::vector<std::int64_t> candidates;  // block ids at the current stride
   int stride = first_stride;
@@ -232,7 +232,17 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
       points[i] = l.node(k % geo.nodes[0], (k / geo.nodes[0]) % geo.nodes[1], k / (geo.nodes[0] * geo.nodes[1]));
     }
     std::vector<double> values;
-    EvaluateParallel(field, points, values, counters);
+    if (external) {
+      external(points, values);
+      if (values.size() != points.size()) throw Error("meshing: the search evaluator returned a wrong count");
+      std::int64_t bad = 0;
+      for (double v : values) bad += !std::isfinite(v);
+      counters.search += std::int64_t(points.size());
+      counters.nodes += std::int64_t(points.size());
+      counters.non_finite += bad;
+    } else {
+      EvaluateParallel(field, points, values, counters);
+    }
     points = {};
     auto value_of = [&](std::int64_t key) {
       return values[std::size_t(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin())];
@@ -286,18 +296,10 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
   }
 }
 
-struct TileResult {
-  std::vector<std::int64_t> vertex_edges;  // global edge ids, in order of creation
-  std::vector<Vec3> vertex_positions;
-  std::vector<std::array<std::int32_t, 3>> triangles;  // local vertex indices
-  std::vector<std::array<int, 3>> band_nodes;
-  std::vector<float> band_values;
-};
-
 // Meshes one tile. `active` (per block of the tile, x fastest) says which blocks to mesh.
 void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& geo, const std::array<int, 3>& c0,
               const std::array<int, 3>& c1, const std::vector<char>& active, bool want_band, Counters& counters,
-              TileResult& out) {
+              TilePiece& out) {
   const MeshLattice& l = geo.lattice;
   const auto& E = Edges();
   const auto& table = Table();
@@ -476,114 +478,132 @@ MeshLattice LatticeFor(const MeshingOptions& o) {
   return l;
 }
 
-TriangleMesh MeshField(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary) {
-  return MeshField(field, options, summary, nullptr);
+namespace {
+Geometry GeometryFor(const MeshLattice& l) {
+  Geometry geo;
+  geo.lattice = l;
+  for (int a = 0; a < 3; ++a) geo.nodes[a] = l.cells[a] + 1;
+  return geo;
 }
+}  // namespace
 
-TriangleMesh MeshField(const BatchField& field, const MeshingOptions& o, MeshingSummary* summary, FieldBand* band) {
+TilePlan PlanTiles(const BatchField& field, const MeshingOptions& o, const PointsEvaluator& search_evaluate) {
   if (auto why = o.validate(); !why.empty()) throw Error("meshing: " + why);
   if (!field.evaluate) throw Error("meshing: the field has no evaluate function");
   if (!std::isfinite(field.iso)) throw Error("meshing: the iso value must be finite");
   const auto t0 = std::chrono::steady_clock::now();
-  Geometry geo;
-  geo.lattice = LatticeFor(o);
-  for (int a = 0; a < 3; ++a) geo.nodes[a] = geo.lattice.cells[a] + 1;
+  TilePlan plan;
+  plan.options = o;
+  plan.lattice = LatticeFor(o);
+  const Geometry geo = GeometryFor(plan.lattice);
   Counters counters;
   const BlockGrid blocks = MakeBlocks(geo.lattice, o.block_cells);
+  plan.blocks_total = blocks.count[0] * blocks.count[1] * blocks.count[2];
 
   // The coarsest stride: at most search_stride, and at least search_min_cells cells along the
   // longest side; dense when that leaves nothing to skip.
   int stride = o.search_stride;
   const int longest = std::max({geo.lattice.cells[0], geo.lattice.cells[1], geo.lattice.cells[2]});
   while (stride > 1 && longest / stride < o.search_min_cells) stride /= 2;
-  const bool sparse = o.sparse && stride >= o.block_cells;
+  plan.sparse = o.sparse && stride >= o.block_cells;
+  plan.search_stride = plan.sparse ? stride : 0;
 
   // Active blocks (sorted ids), or all of them.
   std::vector<std::int64_t> active_blocks;
-  if (sparse) active_blocks = SearchBlocks(field, o, stride, geo, counters);
-  const std::int64_t search_evaluations = counters.search;
+  if (plan.sparse) active_blocks = SearchBlocks(field, o, stride, geo, counters, search_evaluate);
+  plan.search_evaluations = counters.search;
+  plan.search_non_finite = counters.non_finite;
 
   // Tiles.
   const int T = o.tile_cells, per = T / o.block_cells;
-  std::array<std::int64_t, 3> tiles;
-  for (int a = 0; a < 3; ++a) tiles[a] = (geo.lattice.cells[a] + T - 1) / T;
-  const std::int64_t tiles_total = tiles[0] * tiles[1] * tiles[2];
-  std::vector<std::int64_t> tile_list;  // tiles with an active block, in order
-  std::vector<std::vector<std::int64_t>> tile_blocks;  // their active block ids (sparse)
-  if (sparse) {
+  for (int a = 0; a < 3; ++a) plan.tiles[a] = (geo.lattice.cells[a] + T - 1) / T;
+  if (plan.sparse) {
     std::vector<std::pair<std::int64_t, std::int64_t>> tb;  // (tile, block)
     tb.reserve(active_blocks.size());
     for (std::int64_t id : active_blocks) {
       const auto c = blocks.coords(id);
-      tb.push_back({(c[0] / per) + tiles[0] * ((c[1] / per) + tiles[1] * (c[2] / per)), id});
+      tb.push_back({(c[0] / per) + plan.tiles[0] * ((c[1] / per) + plan.tiles[1] * (c[2] / per)), id});
     }
     active_blocks = {};
     std::sort(tb.begin(), tb.end());
     for (const auto& [t, b] : tb) {
-      if (tile_list.empty() || tile_list.back() != t) {
-        tile_list.push_back(t);
-        tile_blocks.emplace_back();
+      if (plan.tile_ids.empty() || plan.tile_ids.back() != t) {
+        plan.tile_ids.push_back(t);
+        plan.tile_blocks.emplace_back();
       }
-      tile_blocks.back().push_back(b);
+      plan.tile_blocks.back().push_back(b);
     }
   } else {
-    tile_list.resize(std::size_t(tiles_total));
-    for (std::int64_t t = 0; t < tiles_total; ++t) tile_list[std::size_t(t)] = t;
+    plan.tile_ids.resize(std::size_t(plan.tiles_total()));
+    for (std::int64_t t = 0; t < plan.tiles_total(); ++t) plan.tile_ids[std::size_t(t)] = t;
   }
-  std::int64_t blocks_active = 0;
+  plan.search_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return plan;
+}
 
-  std::vector<TileResult> results(tile_list.size());
-  Progress progress("mesh: tiles", double(tile_list.size()), !o.show_progress);
-  std::int64_t tiles_done = 0;
-  const bool want_band = band != nullptr;
-#pragma omp parallel for schedule(dynamic) reduction(+ : blocks_active)
-  for (std::int64_t ti = 0; ti < std::int64_t(tile_list.size()); ++ti) {
-    const std::int64_t t = tile_list[std::size_t(ti)];
-    const std::array<std::int64_t, 3> tc{t % tiles[0], (t / tiles[0]) % tiles[1], t / (tiles[0] * tiles[1])};
-    std::array<int, 3> c0, c1, nb;
-    for (int a = 0; a < 3; ++a) {
-      c0[a] = int(tc[a] * T);
-      c1[a] = std::min(c0[a] + T, geo.lattice.cells[a]);
-      nb[a] = (c1[a] - c0[a] + o.block_cells - 1) / o.block_cells;
-    }
-    std::vector<char> active(std::size_t(nb[0]) * nb[1] * nb[2], sparse ? 0 : 1);
-    if (sparse)
-      for (std::int64_t id : tile_blocks[std::size_t(ti)]) {
-        const auto c = blocks.coords(id);
-        active[std::size_t(c[0] - tc[0] * per) +
-               std::size_t(nb[0]) * std::size_t((c[1] - tc[1] * per) + nb[1] * (c[2] - tc[2] * per))] = 1;
-      }
-    for (char a : active) blocks_active += a;
-    MeshTile(field, o, geo, c0, c1, active, want_band, counters, results[std::size_t(ti)]);
-#pragma omp critical(quijibo_mesh_progress)
-    {
-      ++tiles_done;
-      progress.update(double(tiles_done), std::to_string(tiles_done) + " of " + std::to_string(tile_list.size()) + " tiles");
-    }
+TilePiece MeshTilePiece(const BatchField& field, const TilePlan& plan, std::size_t index, bool want_band) {
+  if (index >= plan.tile_ids.size()) throw Error("meshing: tile index out of range");
+  const MeshingOptions& o = plan.options;
+  const Geometry geo = GeometryFor(plan.lattice);
+  const BlockGrid blocks = MakeBlocks(geo.lattice, o.block_cells);
+  const int T = o.tile_cells, per = T / o.block_cells;
+  const std::int64_t t = plan.tile_ids[index];
+  const auto& tiles = plan.tiles;
+  const std::array<std::int64_t, 3> tc{t % tiles[0], (t / tiles[0]) % tiles[1], t / (tiles[0] * tiles[1])};
+  std::array<int, 3> c0, c1, nb;
+  for (int a = 0; a < 3; ++a) {
+    c0[a] = int(tc[a] * T);
+    c1[a] = std::min(c0[a] + T, geo.lattice.cells[a]);
+    nb[a] = (c1[a] - c0[a] + o.block_cells - 1) / o.block_cells;
   }
-  progress.finish();
-  tile_blocks = {};
+  std::vector<char> active(std::size_t(nb[0]) * nb[1] * nb[2], plan.sparse ? 0 : 1);
+  if (plan.sparse)
+    for (std::int64_t id : plan.tile_blocks[index]) {
+      const auto c = blocks.coords(id);
+      active[std::size_t(c[0] - tc[0] * per) +
+             std::size_t(nb[0]) * std::size_t((c[1] - tc[1] * per) + nb[1] * (c[2] - tc[2] * per))] = 1;
+    }
+  TilePiece piece;
+  piece.tile = t;
+  for (char a : active) piece.blocks_active += a;
+  Counters counters;
+  MeshTile(field, o, geo, c0, c1, active, want_band, counters, piece);
+  piece.nodes_evaluated = counters.nodes;
+  piece.bisection_evaluations = counters.bisection;
+  piece.non_finite_values = counters.non_finite;
+  return piece;
+}
 
-  // Merge: one vertex per edge id, sorted by id.
+TriangleMesh WeldTilePieces(const TilePlan& plan, std::vector<TilePiece>& pieces, MeshingSummary* summary,
+                            FieldBand* band) {
+  if (pieces.size() != plan.tile_ids.size()) throw Error("meshing: weld: expected one piece per planned tile");
+  for (std::size_t i = 0; i < pieces.size(); ++i)
+    if (pieces[i].tile != plan.tile_ids[i]) throw Error("meshing: weld: pieces out of tile order");
+  // One vertex per edge id, sorted by id.
   std::size_t total_refs = 0, total_tris = 0;
-  for (const auto& r : results) {
+  std::int64_t nodes = 0, bisection = 0, non_finite = 0, blocks_active = 0;
+  for (const auto& r : pieces) {
     total_refs += r.vertex_edges.size();
     total_tris += r.triangles.size();
+    nodes += r.nodes_evaluated;
+    bisection += r.bisection_evaluations;
+    non_finite += r.non_finite_values;
+    blocks_active += r.blocks_active;
   }
   std::vector<std::int64_t> edges;
   edges.reserve(total_refs);
-  for (const auto& r : results) edges.insert(edges.end(), r.vertex_edges.begin(), r.vertex_edges.end());
+  for (const auto& r : pieces) edges.insert(edges.end(), r.vertex_edges.begin(), r.vertex_edges.end());
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   edges.shrink_to_fit();
   TriangleMesh mesh;
   mesh.vertices.resize(edges.size());
   mesh.triangles.resize(total_tris);
-  std::vector<std::size_t> tri_offset(results.size() + 1, 0);
-  for (std::size_t r = 0; r < results.size(); ++r) tri_offset[r + 1] = tri_offset[r] + results[r].triangles.size();
+  std::vector<std::size_t> tri_offset(pieces.size() + 1, 0);
+  for (std::size_t r = 0; r < pieces.size(); ++r) tri_offset[r + 1] = tri_offset[r] + pieces[r].triangles.size();
 #pragma omp parallel for schedule(dynamic)
-  for (std::int64_t ri = 0; ri < std::int64_t(results.size()); ++ri) {
-    TileResult& r = results[std::size_t(ri)];
+  for (std::int64_t ri = 0; ri < std::int64_t(pieces.size()); ++ri) {
+    TilePiece& r = pieces[std::size_t(ri)];
     std::vector<int> global(r.vertex_edges.size());
     for (std::size_t v = 0; v < r.vertex_edges.size(); ++v) {
       const std::size_t g = std::size_t(std::lower_bound(edges.begin(), edges.end(), r.vertex_edges[v]) - edges.begin());
@@ -597,10 +617,10 @@ TriangleMesh MeshField(const BatchField& field, const MeshingOptions& o, Meshing
     r.triangles = {};
   }
   if (band) {
-    band->lattice = geo.lattice;
+    band->lattice = plan.lattice;
     band->nodes.clear();
     band->values.clear();
-    for (auto& r : results) {
+    for (auto& r : pieces) {
       band->nodes.insert(band->nodes.end(), r.band_nodes.begin(), r.band_nodes.end());
       band->values.insert(band->values.end(), r.band_values.begin(), r.band_values.end());
       r.band_nodes = {};
@@ -609,21 +629,46 @@ TriangleMesh MeshField(const BatchField& field, const MeshingOptions& o, Meshing
   }
   if (summary) {
     MeshingSummary& s = *summary;
-    s.nodes_evaluated = counters.nodes;
-    s.bisection_evaluations = counters.bisection;
-    s.non_finite_values = counters.non_finite;
-    s.search_evaluations = search_evaluations;
-    s.tiles_total = tiles_total;
-    s.tiles_meshed = std::int64_t(tile_list.size());
-    s.blocks_total = blocks.count[0] * blocks.count[1] * blocks.count[2];
+    s.nodes_evaluated = plan.search_evaluations + nodes;
+    s.bisection_evaluations = bisection;
+    s.non_finite_values = plan.search_non_finite + non_finite;
+    s.search_evaluations = plan.search_evaluations;
+    s.tiles_total = plan.tiles_total();
+    s.tiles_meshed = std::int64_t(plan.tile_ids.size());
+    s.blocks_total = plan.blocks_total;
     s.blocks_active = blocks_active;
     s.vertices = std::int64_t(mesh.vertices.size());
     s.triangles = std::int64_t(mesh.triangles.size());
-    s.cells = geo.lattice.cells;
-    s.search_stride = sparse ? stride : 0;
-    s.spacing = geo.lattice.spacing;
-    s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    s.cells = plan.lattice.cells;
+    s.search_stride = plan.search_stride;
+    s.spacing = plan.lattice.spacing;
   }
+  return mesh;
+}
+
+TriangleMesh MeshField(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary) {
+  return MeshField(field, options, summary, nullptr);
+}
+
+TriangleMesh MeshField(const BatchField& field, const MeshingOptions& o, MeshingSummary* summary, FieldBand* band) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const TilePlan plan = PlanTiles(field, o);
+  std::vector<TilePiece> pieces(plan.tile_ids.size());
+  Progress progress("mesh: tiles", double(pieces.size()), !o.show_progress);
+  std::int64_t tiles_done = 0;
+  const bool want_band = band != nullptr;
+#pragma omp parallel for schedule(dynamic)
+  for (std::int64_t ti = 0; ti < std::int64_t(pieces.size()); ++ti) {
+    pieces[std::size_t(ti)] = MeshTilePiece(field, plan, std::size_t(ti), want_band);
+#pragma omp critical(quijibo_mesh_progress)
+    {
+      ++tiles_done;
+      progress.update(double(tiles_done), std::to_string(tiles_done) + " of " + std::to_string(pieces.size()) + " tiles");
+    }
+  }
+  progress.finish();
+  TriangleMesh mesh = WeldTilePieces(plan, pieces, summary, band);
+  if (summary) summary->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return mesh;
 }
 

@@ -92,4 +92,54 @@ TriangleMesh MeshField(const BatchField& field, const MeshingOptions& options, M
 TriangleMesh MeshField(const BatchField& field, const MeshingOptions& options,
                        MeshingSummary* summary = nullptr);
 
+// ---------------------------------------------------------------------------------------------
+// Tile-level API (issue 8, docs/mpi.md): MeshField is PlanTiles, then MeshTilePiece for every planned
+// tile (in parallel), then WeldTilePieces. A distributed mesher calls the same three steps and gets the
+// same mesh, bit for bit, whatever process meshed which tile.
+
+// Evaluates points[i] into values[i] (values resized by the callee) exactly as field.evaluate would; lets
+// the sparse search spread its lattice over processes (e.g. MPI ranks).
+using PointsEvaluator = std::function<void(const std::vector<Vec3>& points, std::vector<double>& values)>;
+
+// What the sparse search found: the tiles to mesh and their active blocks. Deterministic: depends only on
+// the field's values and the options.
+struct TilePlan {
+  MeshingOptions options;
+  MeshLattice lattice;
+  bool sparse = true;
+  int search_stride = 0;                              // 0: dense
+  std::array<std::int64_t, 3> tiles{0, 0, 0};         // tiles per axis
+  std::vector<std::int64_t> tile_ids;                 // tiles to mesh, ascending (x fastest)
+  std::vector<std::vector<std::int64_t>> tile_blocks; // sparse: active block ids of each (empty: dense)
+  std::int64_t search_evaluations = 0, search_non_finite = 0;
+  std::int64_t blocks_total = 0;
+  double search_seconds = 0.0;
+  std::int64_t tiles_total() const { return tiles[0] * tiles[1] * tiles[2]; }
+};
+
+// The sparse block search (or the dense tile list). Throws quijibo::Error on invalid options.
+// `search_evaluate` (optional) replaces the local parallel evaluation of the search lattice.
+TilePlan PlanTiles(const BatchField& field, const MeshingOptions& options, const PointsEvaluator& search_evaluate = {});
+
+// One meshed tile: vertices keyed by global edge id (3 * node id + axis, node id = i + N_x (j + N_y k)),
+// triangles as indices into vertex_edges (so, equivalently, as edge-id triples).
+struct TilePiece {
+  std::int64_t tile = -1;
+  std::vector<std::int64_t> vertex_edges;
+  std::vector<Vec3> vertex_positions;
+  std::vector<std::array<std::int32_t, 3>> triangles;
+  std::vector<std::array<int, 3>> band_nodes;  // filled when asked for
+  std::vector<float> band_values;
+  std::int64_t nodes_evaluated = 0, bisection_evaluations = 0, non_finite_values = 0, blocks_active = 0;
+};
+
+// Meshes plan.tile_ids[index] (single-threaded; thread-safe, call it from many threads).
+TilePiece MeshTilePiece(const BatchField& field, const TilePlan& plan, std::size_t index, bool want_band);
+
+// Welds pieces[i] (the piece of plan.tile_ids[i], for every i) into one mesh: one vertex per edge id,
+// sorted by id; triangles in tile order. Releases the pieces' memory. Fills `summary` (seconds excluded)
+// and `band` when not null.
+TriangleMesh WeldTilePieces(const TilePlan& plan, std::vector<TilePiece>& pieces, MeshingSummary* summary,
+                            FieldBand* band);
+
 }  // namespace quijibo

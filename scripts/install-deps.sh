@@ -10,6 +10,7 @@ PACKAGES=(
   libgtest-dev libbenchmark-dev
   gnuplot-nox
   libassimp-dev
+  mpi-default-dev mpi-default-bin
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -1,0 +1,10 @@
+// quijibo-mpi when the build found no MPI: says that the feature is off (docs/mpi.md).
+#include <cstdio>
+
+int main(int, char**) {
+  std::fprintf(stderr,
+               "quijibo-mpi: error: MPI support is off in this build (CMake found no MPI at configure time).\n"
+               "Install Open MPI (Debian: mpi-default-dev mpi-default-bin, or ./scripts/install-deps.sh) and\n"
+               "reconfigure; meanwhile `quijibo mesh` meshes on one machine (docs/mpi.md).\n");
+  return 2;
+}
