@@ -24,6 +24,8 @@
 #include "experiments/cli.h"
 #include "experiments/plot.h"
 #include "mesh/sdf_command.h"
+#include "monopole/fit_pipeline.h"
+#include "monopole/initial_guess.h"
 #include "optim/schedule.h"
 #include "quijibo/energy.h"
 #include "quijibo/error.h"
@@ -304,17 +306,19 @@ json ResolveExperiment(const std::string& path) {
       if (r.has(ip))
         r.allow_keys(ip, {"kind", "epsilon", "fit_target", "candidates", "batch", "seed", "sampling_seed", "offset",
                           "bem_elements", "amplitude", "zero_roots", "scan_resolution", "png_size"});
-      rd.Num(ip + "/epsilon", 0.01, 0.0, 1.0, true);
+      const MonopoleOptions mo;
+      const InitialGuessOptions go;
+      rd.Num(ip + "/epsilon", mo.fit.epsilon, 0.0, 1.0, true);
       rd.Str(ip + "/fit_target", "reference", {"reference", "potential"});
-      rd.Int(ip + "/candidates", 100000, 1, 100000000);
+      rd.Int(ip + "/candidates", mo.sampling.count, 1, 100000000);
       if (r.has(ip + "/batch")) rd.Int(ip + "/batch", 1000, 1, 100000000);
       rd.Int(ip + "/seed", seed, 0, (1ll << 53));
       rd.Int(ip + "/sampling_seed", seed, 0, (1ll << 53));
       if (r.has(ip + "/offset")) rd.Num(ip + "/offset", 1.0, 0.0, 1000.0);
       if (r.has(ip + "/bem_elements")) rd.Int(ip + "/bem_elements", 3000, 4, 1000000);
-      rd.Num(ip + "/amplitude", 50.0, 0.0, 1e6, true);
+      rd.Num(ip + "/amplitude", go.amplitude, 0.0, 1e6, true);
       rd.Bool(ip + "/zero_roots", true);
-      rd.Int(ip + "/scan_resolution", 25, 4, 512);
+      rd.Int(ip + "/scan_resolution", go.scan_resolution, 4, 512);
       rd.Int(ip + "/png_size", 800, 16, 8192);
     } else if (kind == "random") {
       if (r.has(ip))
@@ -479,6 +483,26 @@ void RunCommand(const std::vector<std::string>& args, const std::string& stdout_
   AddModulusCommands(app);
   AddJuliaCommands(app);
   std::vector<std::string> reversed(args.rbegin(), args.rend());
+  // Under --quiet the command's own stderr (reports, warnings) goes next to its stdout.
+  int saved_err = -1;
+  if (Progress::globally_quiet() && !stdout_path.empty()) {
+    std::fflush(stderr);
+    const int efd = ::open((stdout_path + ".err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (efd >= 0) {
+      saved_err = ::dup(STDERR_FILENO);
+      ::dup2(efd, STDERR_FILENO);
+      ::close(efd);
+    }
+  }
+  struct RestoreErr {
+    int saved;
+    ~RestoreErr() {
+      if (saved < 0) return;
+      std::fflush(stderr);
+      ::dup2(saved, STDERR_FILENO);
+      ::close(saved);
+    }
+  } restore_err{saved_err};
   std::fflush(stdout);
   const int saved = ::dup(STDOUT_FILENO);
   const int fd = ::open(stdout_path.empty() ? "/dev/null" : stdout_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -988,7 +1012,7 @@ void Runner::WriteReport(double total_seconds) {
          << "| level | pass | stop | iterations | evaluations | seconds | energy start | energy end | absolute end |\n"
             "|---|---|---|---|---|---|---|---|---|\n";
       for (const json& p : s["passes"])
-        md << "| " << p.value("level", 0) << " | " << p.value("kind", std::string("?")) << " | "
+        md << "| " << p.value("level", 0) << " | " << p.value("pass", std::string("?")) << " | "
            << p.value("stop", std::string()) << " | " << p.value("iterations", 0) << " | " << p.value("evaluations", 0)
            << " | " << Fixed(p.value("seconds", 0.0), 2) << " | " << Fixed(p.value("energy_start", 0.0), 6) << " | "
            << Fixed(p.value("energy_end", 0.0), 6) << " | " << Fixed(p.value("absolute_end", 0.0), 6) << " |\n";
@@ -1031,7 +1055,7 @@ void Runner::WriteReport(double total_seconds) {
 void AddRunCommand(CLI::App& app) {
   struct Args {
     std::string experiment, out;
-    bool resume = false, quiet = false;
+    bool resume = false, quiet = false, check = false;
   };
   auto a = std::make_shared<Args>();
   CLI::App* c = app.add_subcommand(
@@ -1041,11 +1065,16 @@ void AddRunCommand(CLI::App& app) {
   c->add_option("-o,--out", a->out, "Results folder (default: outputs.folder, else results/<name>)");
   c->add_flag("--resume", a->resume, "Continue an interrupted optimization from its checkpoint");
   c->add_flag("-q,--quiet", a->quiet, "No progress on stderr");
+  c->add_flag("--check", a->check, "Only validate: print the resolved experiment (every default filled in) and exit");
   c->callback([a] {
     if (a->quiet) Progress::globally_quiet() = true;
     const bool quiet = Progress::globally_quiet();
     // Everything is checked before anything is written.
     json exp = ResolveExperiment(a->experiment);
+    if (a->check) {
+      std::printf("%s\n", exp.dump(2).c_str());
+      return;
+    }
     std::string out = a->out;
     if (out.empty())
       out = exp["outputs"].contains("folder") ? exp["outputs"]["folder"].get<std::string>()
