@@ -708,7 +708,6 @@ std::string Runner::Optimize(const json& o, const std::string& initial_hash) {
 
 void Runner::Run() {
   const auto t0 = std::chrono::steady_clock::now();
-  WriteFileAtomically(P("experiment.resolved.json"), exp_.dump(2) + "\n");
   const std::string method = exp_["method"];
   if (method == "quijibo") RunQuijibo();
   else if (method == "modulus") RunModulus();
@@ -718,6 +717,7 @@ void Runner::Run() {
               {"stages", json::array()}};
   for (const auto& r : records_)
     run["stages"].push_back({{"stage", r.name}, {"status", r.status}, {"seconds", r.seconds}, {"hash", r.hash}});
+  WriteFileAtomically(P("experiment.resolved.json"), exp_.dump(2) + "\n");
   WriteFileAtomically(P("run.json"), run.dump(1) + "\n");
   if (exp_["outputs"]["report"].get<bool>()) WriteReport(total);
   if (!quiet_) {
