@@ -24,6 +24,7 @@ void AddOptimizeCommand(CLI::App& app);
 void AddModuleCommands(CLI::App& app);  // sdf, monopoles
 void AddModulusCommands(CLI::App& app);  // modulus, portal, compare, bench modulus (after AddBenchCommand)
 void AddJuliaCommands(CLI::App& app);   // mesh, picture, bench mesh (after AddBenchCommand)
+void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/run_cmd.cpp)
 
 // `quijibo mesh` with another mesher (quijibo-mpi, docs/mpi.md). The mesher meshes exactly like
 // MeshField (mesh, summary, band when not null) and returns false on processes that must not write

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   quijibo::cli::AddModuleCommands(app);
   quijibo::cli::AddModulusCommands(app);
   quijibo::cli::AddJuliaCommands(app);
+  quijibo::cli::AddRunCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

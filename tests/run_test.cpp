@@ -1,0 +1,281 @@
+// `quijibo run`: a tiny experiment end to end, stage reuse by content hash, bad experiments (one
+// clear line, non-zero exit, no results folder), kill and --resume, a read-only results folder.
+// Tiny settings throughout (analytic torus, 20^3, a few iterations) so the suite stays fast.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fcntl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::string Slurp(const std::string& p) {
+  std::ifstream in(p);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+void Write(const std::string& p, const std::string& text) {
+  std::ofstream(p) << text;
+}
+
+std::string TempDir(const std::string& name) {
+  const auto d = fs::temp_directory_path() / ("quijibo_run_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d.string();
+}
+
+// Runs the binary with `args`; stderr is collected in *err (when given). With `background`, returns at
+// once with the pid.
+int RunQ(const std::vector<std::string>& args, std::string* err = nullptr, pid_t* background = nullptr) {
+  std::vector<std::string> all = {QUIJIBO_BINARY};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const std::string err_path =
+      (fs::temp_directory_path() / ("quijibo_run_stderr_" + std::to_string(::getpid()))).string();
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, err ? err_path.c_str() : "/dev/null",
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  pid_t pid;
+  posix_spawn(&pid, QUIJIBO_BINARY, &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (background) {
+    *background = pid;
+    return 0;
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (err) {
+    *err = Slurp(err_path);
+    fs::remove(err_path);
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+bool HaveGnuplot() { return std::system("gnuplot --version > /dev/null 2>&1") == 0; }
+
+// The tiny experiment: a torus, a random map, two short levels.
+json Tiny() {
+  return {{"name", "tiny"},
+          {"seed", 3},
+          {"target", {{"analytic", "torus"}, {"resolution", 20}}},
+          {"initial", {{"kind", "random"}, {"top", 10}, {"bottom", 8}}},
+          {"optimizer",
+           {{"schedule", "10(VF)20(VF)"}, {"max_iterations", {{"V", 8}, {"F", 15}}}, {"checkpoint_every", 5}}},
+          {"mesh", {{"resolution", 20}, {"iterations", 1}}},
+          {"pictures", {{"slice_size", 48}, {"render_size", 48}, {"render_views", 2}}},
+          {"outputs", {{"plot", HaveGnuplot()}}}};
+}
+
+// The stages of run.json (a copy: iterating a member of a temporary would dangle).
+json RunRecord(const std::string& out) { return json::parse(Slurp(out + "/run.json")); }
+
+TEST(RunTest, ATinyExperimentRunsEndToEndAndIsReusedWhenUnchanged) {
+  const std::string dir = TempDir("tiny");
+  const std::string exp = dir + "/tiny.json", out = dir + "/results";
+  Write(exp, Tiny().dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  for (const char* f : {"experiment.resolved.json", "run.json", "report.md", "initial/target.qgrid",
+                        "initial/target.frame.json", "initial/map.json", "optimized/map.json", "optimized/log.jsonl",
+                        "optimized/summary.json", "optimized/checkpoint.json", "mesh/julia.ply", "mesh/julia.vdb",
+                        "mesh/summary.json", "pictures/slice-n1.png", "pictures/render.png"})
+    EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
+  if (HaveGnuplot()) {
+    EXPECT_TRUE(fs::exists(out + "/plot/convergence.png"));
+    EXPECT_TRUE(fs::exists(out + "/plot/convergence.svg"));
+  }
+  for (const auto& e : fs::recursive_directory_iterator(out))
+    EXPECT_EQ(e.path().string().find(".partial"), std::string::npos) << e.path();
+  const std::string report = Slurp(out + "/report.md");
+  EXPECT_NE(report.find("10(VF)20(VF)"), std::string::npos);
+  EXPECT_NE(report.find("pictures/render.png"), std::string::npos);
+  const json resolved = json::parse(Slurp(out + "/experiment.resolved.json"));
+  EXPECT_EQ(resolved["optimizer"][0]["backend"], "lbfgspp");  // defaults are filled in
+  EXPECT_EQ(resolved["mesh"]["escape"], 2000.0);
+  for (const json& s : json(RunRecord(out)["stages"])) EXPECT_EQ(s["status"], "ran") << s;
+  const std::string map1 = Slurp(out + "/optimized/map.json");
+
+  // Unchanged: every stage is reused.
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  for (const json& s : json(RunRecord(out)["stages"])) EXPECT_EQ(s["status"], "reused") << s;
+  EXPECT_NE(Slurp(out + "/report.md").find("reused"), std::string::npos);
+  EXPECT_EQ(Slurp(out + "/optimized/map.json"), map1);
+
+  // A meshing setting changes: the mesh and pictures run again, the optimization is reused.
+  json changed = Tiny();
+  changed["mesh"]["resolution"] = 22;
+  Write(exp, changed.dump(1));
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  for (const json& s : json(RunRecord(out)["stages"])) {
+    const std::string name = s["stage"];
+    EXPECT_EQ(s["status"], name == "mesh" || name == "pictures" ? "ran" : "reused") << s;
+  }
+  EXPECT_EQ(json::parse(Slurp(out + "/mesh/summary.json"))["resolution"], 22);
+  fs::remove_all(dir);
+}
+
+TEST(RunTest, AMeshTargetGoesThroughTheMonopoleStage) {
+  const std::string dir = TempDir("mesh");
+  const std::string exp = dir + "/bunny.json", out = dir + "/results";
+  const json e = {
+      {"target", {{"mesh", std::string(QUIJIBO_SOURCE_DIR) + "/data/bunny.obj"}, {"resolution", 25}}},
+      {"initial", {{"candidates", 10000}, {"bem_elements", 600}, {"png_size", 64}}},
+      {"optimizer", {{"schedule", "12(VF)"}, {"max_iterations", {{"V", 5}, {"F", 5}}}}},
+      {"mesh", {{"enabled", false}}},
+      {"pictures", {{"slice_size", 32}}},
+      {"outputs", {{"plot", false}}}};
+  Write(exp, e.dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  for (const char* f : {"initial/roots.ply", "initial/potential.png", "initial/monopoles.json", "optimized/map.json",
+                        "pictures/slice-n1.png", "report.md"})
+    EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
+  EXPECT_NE(Slurp(out + "/report.md").find("Initial guess"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+struct BadCase {
+  std::string name, text, expect;  // expect: a piece of the one-line message
+};
+
+TEST(RunTest, BadExperimentsGiveOneClearLineAndNoResultsFolder) {
+  const std::string dir = TempDir("bad");
+  const std::string torus = R"("target": {"analytic": "torus", "resolution": 20})";
+  const std::vector<BadCase> cases = {
+      {"syntax", "{\"name\": \"x\",", ":1:"},
+      {"nan", R"({"target": {"analytic": "torus", "resolution": NaN}})", ":1:"},
+      {"not-object", "[1, 2]", "expected a JSON object"},
+      {"unknown-key", "{" + torus + R"(, "optimiser": {}})", "/optimiser: unknown key (did you mean \"optimizer\"?)"},
+      {"unknown-nested", "{" + torus + R"(, "mesh": {"resolutoin": 64}})", "/mesh/resolutoin"},
+      {"wrong-type", R"({"target": {"analytic": "torus", "resolution": "big"}})", "/target/resolution: expected an integer"},
+      {"negative-res", R"({"target": {"analytic": "torus", "resolution": -5}})", "/target/resolution"},
+      {"zero-res", R"({"target": {"analytic": "torus", "resolution": 0}})", "/target/resolution"},
+      {"huge-res", R"({"target": {"analytic": "torus", "resolution": 100000000}})", "/target/resolution"},
+      {"mesh-res", "{" + torus + R"(, "mesh": {"resolution": -1}})", "/mesh/resolution"},
+      {"empty-schedule", "{" + torus + R"(, "optimizer": {"schedule": ""}})", "/optimizer/schedule"},
+      {"empty-levels", "{" + torus + R"(, "optimizer": {"schedule": {"levels": []}}})", "/optimizer/schedule/levels"},
+      {"bad-notation", "{" + torus + R"j(, "optimizer": {"schedule": "25(VXF)"}})j", "/optimizer/schedule"},
+      {"missing-mesh", R"({"target": {"mesh": "no-such-mesh.obj"}})", "/target/mesh: no such file"},
+      {"no-target", R"({"name": "x"})", "/target"},
+      {"two-targets", R"({"target": {"analytic": "torus", "mesh": "a.obj"}})", "exactly one"},
+      {"precision", "{" + torus + R"(, "optimizer": {"precision": "long-double"}})", "/optimizer/precision"},
+      {"method", "{" + torus + R"(, "method": "quijbo"})", "/method"},
+      {"padding", R"({"target": {"analytic": "torus", "padding": 0.7}})", "/target/padding"},
+  };
+  for (const BadCase& c : cases) {
+    const std::string exp = dir + "/" + c.name + ".json", out = dir + "/out-" + c.name;
+    Write(exp, c.text);
+    std::string err;
+    EXPECT_NE(RunQ({"run", exp, "--out", out}, &err), 0) << c.name;
+    EXPECT_NE(err.find(c.expect), std::string::npos) << c.name << ": " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << c.name << ": " << err;
+    EXPECT_EQ(err.rfind("quijibo: error: ", 0), 0u) << c.name << ": " << err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+  std::string err;
+  EXPECT_NE(RunQ({"run", dir + "/missing.json", "--out", dir + "/out-missing"}, &err), 0);
+  EXPECT_NE(err.find("no such file"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir + "/out-missing"));
+  // A mesh that is not a mesh: found only when the initial stage reads it; nothing is left behind.
+  Write(dir + "/garbage.obj", "this is not a mesh\n");
+  Write(dir + "/garbage.json", R"({"target": {"mesh": "garbage.obj", "resolution": 16}})");
+  EXPECT_NE(RunQ({"run", dir + "/garbage.json", "--out", dir + "/out-garbage"}, &err), 0);
+  EXPECT_NE(err.find("garbage.obj"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir + "/out-garbage")) << err;
+  fs::remove_all(dir);
+}
+
+TEST(RunTest, AReadOnlyResultsFolderIsAClearError) {
+  const std::string dir = TempDir("readonly");
+  const std::string exp = dir + "/tiny.json";
+  Write(exp, Tiny().dump(1));
+  std::string out = dir + "/locked";
+  fs::create_directories(out);
+  ::chmod(out.c_str(), 0555);
+  if (::access(out.c_str(), W_OK) == 0) {
+    // root ignores permissions: use a read-only file system instead, if there is one.
+    out = "/proc/sys/quijibo-results";
+    if (::access("/proc/sys", W_OK) == 0) {
+      ::chmod((dir + "/locked").c_str(), 0755);
+      fs::remove_all(dir);
+      GTEST_SKIP() << "no read-only folder to try (running as root)";
+    }
+  }
+  std::string err;
+  EXPECT_NE(RunQ({"run", exp, "--out", out + "/sub"}, &err), 0);
+  EXPECT_TRUE(err.find("not writable") != std::string::npos || err.find("cannot create") != std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out + "/sub"));
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  ::chmod((dir + "/locked").c_str(), 0755);
+  fs::remove_all(dir);
+}
+
+// Killed with SIGKILL mid-optimization (after a checkpoint) and resumed with --resume, the run ends
+// where an uninterrupted run ends.
+TEST(RunTest, KilledAndResumedRunMatchesAnUninterruptedOne) {
+  const std::string dir = TempDir("kill");
+  const json e = {{"seed", 5},
+                  {"target", {{"analytic", "torus"}, {"resolution", 20}}},
+                  {"initial", {{"kind", "random"}, {"top", 30}, {"bottom", 20}, {"root_radius", 1.5}}},
+                  {"optimizer",
+                   {{"schedule", "10(VF)20(VRF)"}, {"max_iterations", {{"F", 50}, {"R", 25}}}, {"checkpoint_every", 7}}},
+                  {"mesh", {{"enabled", false}}},
+                  {"pictures", {{"enabled", false}}},
+                  {"outputs", {{"plot", false}}}};
+  const std::string exp = dir + "/kill.json";
+  Write(exp, e.dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", dir + "/whole", "--quiet"}, &err), 0) << err;
+
+  pid_t pid;
+  RunQ({"run", exp, "--out", dir + "/killed", "--quiet"}, nullptr, &pid);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  bool killed = false;
+  while (std::chrono::steady_clock::now() < deadline) {
+    int status;
+    if (waitpid(pid, &status, WNOHANG) == pid) break;
+    const std::string log = Slurp(dir + "/killed/optimized/log.jsonl");
+    if (std::count(log.begin(), log.end(), '\n') > 80 && fs::exists(dir + "/killed/optimized/checkpoint.json")) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      killed = true;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_TRUE(killed) << "the run finished before it could be killed: the test proves less";
+  if (killed) {
+    EXPECT_FALSE(fs::exists(dir + "/killed/optimized/stage.json"));
+  }
+  ASSERT_EQ(RunQ({"run", exp, "--out", dir + "/killed", "--resume", "--quiet"}, &err), 0) << err;
+  const json whole = json::parse(Slurp(dir + "/whole/optimized/map.json"));
+  const json resumed = json::parse(Slurp(dir + "/killed/optimized/map.json"));
+  for (const char* k : {"top", "bottom", "ln_C", "tau", "beta"}) EXPECT_EQ(whole[k], resumed[k]) << k;
+  if (killed) {
+    bool saw_resumed = false;
+    for (const json& s : json(RunRecord(dir + "/killed")["stages"])) saw_resumed |= s["status"] == "resumed";
+    EXPECT_TRUE(saw_resumed) << RunRecord(dir + "/killed").dump() << err;
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
