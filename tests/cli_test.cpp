@@ -1,5 +1,7 @@
 // The `quijibo` command as a user meets it: exit codes, one-line errors, JSON output.
 #include <gtest/gtest.h>
+
+#include "quijibo_command.h"
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -12,20 +14,8 @@
 namespace quijibo {
 namespace {
 
-struct CommandResult {
-  int code;
-  std::string out;
-};
-
-CommandResult Quijibo(const std::string& args) {
-  const std::string cmd = std::string(QUIJIBO_BINARY) + " --quiet " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+using quijibo::testing::CommandResult;
+inline CommandResult Quijibo(const std::string& args) { return quijibo::testing::RunQuijibo(args); }
 
 class CliTest : public ::testing::Test {
  protected:

@@ -1,6 +1,8 @@
 // `quijibo mesh` and `quijibo picture` as a user meets them: outputs, one-line errors, no partial
 // output on bad input.
 #include <gtest/gtest.h>
+
+#include "quijibo_command.h"
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -10,20 +12,8 @@
 namespace quijibo {
 namespace {
 
-struct CommandRun {
-  int code;
-  std::string out;
-};
-
-CommandRun Quijibo(const std::string& args) {
-  const std::string cmd = std::string(QUIJIBO_BINARY) + " --quiet " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+using CommandRun = quijibo::testing::CommandResult;
+inline CommandRun Quijibo(const std::string& args) { return quijibo::testing::RunQuijibo(args); }
 
 class JuliaCli : public ::testing::Test {
  protected:

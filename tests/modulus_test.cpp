@@ -1,5 +1,7 @@
 // Shape modulus (2023) and portals (2024): versor polynomials, the map, portals, the Koch snowflake.
 #include <gtest/gtest.h>
+
+#include "quijibo_command.h"
 #include <sys/wait.h>
 
 #include <cmath>
@@ -342,19 +344,8 @@ TEST(Portal, WorksOnRationalMaps) {
   EXPECT_NEAR((pm.Apply(far) - rm->Apply(far)).norm(), 0.0, 1e-12);
 }
 
-struct CliRun {
-  int code;
-  std::string out;
-};
-CliRun Quijibo(const std::string& args) {
-  const std::string cmd = std::string(QUIJIBO_BINARY) + " --quiet " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+using CliRun = quijibo::testing::CommandResult;
+inline CliRun Quijibo(const std::string& args) { return quijibo::testing::RunQuijibo(args); }
 
 TEST(ModulusCli, KochImageAndErrors) {
   const auto dir = std::filesystem::temp_directory_path() / "quijibo_modulus_cli";

@@ -1,5 +1,7 @@
 // `quijibo monopoles` as a user meets it: the files it promises, and nothing on failure.
 #include <gtest/gtest.h>
+
+#include "quijibo_command.h"
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -14,14 +16,9 @@ namespace quijibo {
 namespace {
 
 int RunQuijibo(const std::string& args, std::string* out = nullptr) {
-  const std::string cmd = std::string(QUIJIBO_BINARY) + " --quiet monopoles " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string text;
-  char buf[4096];
-  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) text.append(buf, n);
-  const int status = pclose(p);
-  if (out) *out = text;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const testing::CommandResult r = testing::RunQuijibo("monopoles " + args);
+  if (out) *out = r.out;
+  return r.code;
 }
 
 std::filesystem::path FreshDir(const std::string& name) {
