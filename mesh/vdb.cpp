@@ -32,6 +32,21 @@ openvdb::math::Transform::Ptr CellCentredTransform(const GridFrame& frame) {
 
 }  // namespace
 
+namespace {
+
+// One grid to `path` as a .vdb file, written to memory first so a failure leaves no file.
+void WriteGridAtomically(const std::string& path, const openvdb::FloatGrid::Ptr& vdb) {
+  std::ostringstream bytes(std::ios::binary);
+  try {
+    openvdb::io::Stream(bytes).write(openvdb::GridCPtrVec{vdb});
+  } catch (const std::exception& e) {
+    throw Error(path + ": cannot write VDB: " + e.what());
+  }
+  WriteFileAtomically(path, std::move(bytes).str());
+}
+
+}  // namespace
+
 void WriteVdb(const std::string& path, const ScalarGrid& grid, const std::string& name) {
   if (const std::string why = grid.frame.validate(); !why.empty())
     throw Error(path + ": cannot write VDB: " + why);
@@ -54,13 +69,7 @@ void WriteVdb(const std::string& path, const ScalarGrid& grid, const std::string
     for (int j = 0; j < d[1]; ++j)
       for (int i = 0; i < d[0]; ++i)
         acc.setValueOn(openvdb::Coord(i, j, k), float(grid.values[grid.frame.index(i, j, k)]));
-  std::ostringstream bytes(std::ios::binary);
-  try {
-    openvdb::io::Stream(bytes).write(openvdb::GridCPtrVec{vdb});
-  } catch (const std::exception& e) {
-    throw Error(path + ": cannot write VDB: " + e.what());
-  }
-  WriteFileAtomically(path, std::move(bytes).str());
+  WriteGridAtomically(path, vdb);
 }
 
 void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
@@ -82,13 +91,7 @@ void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
   auto acc = vdb->getAccessor();
   for (std::size_t n = 0; n < voxels.size(); ++n)
     acc.setValueOn(openvdb::Coord(voxels[n][0], voxels[n][1], voxels[n][2]), values[n]);
-  std::ostringstream bytes(std::ios::binary);
-  try {
-    openvdb::io::Stream(bytes).write(openvdb::GridCPtrVec{vdb});
-  } catch (const std::exception& e) {
-    throw Error(path + ": cannot write VDB: " + e.what());
-  }
-  WriteFileAtomically(path, std::move(bytes).str());
+  WriteGridAtomically(path, vdb);
 }
 
 ScalarGrid ReadVdb(const std::string& path, const std::string& name) {

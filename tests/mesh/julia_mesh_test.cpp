@@ -8,6 +8,7 @@
 #include "mesh/julia_field.h"
 #include "mesh/marching_cubes.h"
 #include "mesh/pictures.h"
+#include "mesh_fixtures.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo {
@@ -30,16 +31,7 @@ RationalMap SmallMap() {
   return m;
 }
 
-std::multiset<std::array<Vec3, 3>> Canonical(const TriangleMesh& m) {
-  std::multiset<std::array<Vec3, 3>> s;
-  for (const auto& t : m.triangles) {
-    std::array<Vec3, 3> p{m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]};
-    const int first = int(std::min_element(p.begin(), p.end()) - p.begin());
-    std::rotate(p.begin(), p.begin() + first, p.end());
-    s.insert(p);
-  }
-  return s;
-}
+using testing::Canonical;
 
 TEST(JuliaMesh, DenseAndSparseAgreeAndThreadsDoNotMatter) {
   const RationalMap map = SmallMap();

@@ -47,17 +47,7 @@ std::int64_t Euler(const TriangleMesh& m, const MeshTopology& t) {
   return std::int64_t(m.vertices.size()) - t.edges + std::int64_t(m.triangles.size());
 }
 
-// The mesh as a set of triangles of positions (rotated so the smallest vertex comes first).
-std::multiset<std::array<Vec3, 3>> Canonical(const TriangleMesh& m) {
-  std::multiset<std::array<Vec3, 3>> s;
-  for (const auto& t : m.triangles) {
-    std::array<Vec3, 3> p{m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]};
-    const int first = int(std::min_element(p.begin(), p.end()) - p.begin());
-    std::rotate(p.begin(), p.begin() + first, p.end());
-    s.insert(p);
-  }
-  return s;
-}
+using testing::Canonical;
 
 TEST(MarchingCubes, SphereIsClosedManifoldGenusZero) {
   MeshingOptions o;

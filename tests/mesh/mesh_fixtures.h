@@ -3,11 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <random>
+#include <set>
 #include <string>
 
 #include "mesh/triangle_mesh.h"
@@ -83,5 +86,18 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// The mesh as a multiset of triangles of positions, each rotated so its smallest vertex comes
+// first: equal for two meshes that differ only in vertex and face order.
+inline std::multiset<std::array<Vec3, 3>> Canonical(const TriangleMesh& m) {
+  std::multiset<std::array<Vec3, 3>> s;
+  for (const auto& t : m.triangles) {
+    std::array<Vec3, 3> p{m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]};
+    const int first = int(std::min_element(p.begin(), p.end()) - p.begin());
+    std::rotate(p.begin(), p.begin() + first, p.end());
+    s.insert(p);
+  }
+  return s;
+}
 
 }  // namespace quijibo::testing
