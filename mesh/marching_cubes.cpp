@@ -252,11 +252,15 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
     for (std::int64_t id : candidates) {
       const auto c = g.coords(id);
       int in = 0;
-      for (int v = 0; v < 8; ++v)
-        in += Inside(value_of(geo.node_id(corner(c[0], 0, v & 1), corner(c[1], 1, (v >> 1) & 1),
-                                          corner(c[2], 2, (v >> 2) & 1))),
-                     field.iso);
-      if (in != 0 && in != 8) crossing.push_back(id);
+      double nearest = std::numeric_limits<double>::infinity();  // smallest |f - iso| at a corner
+      for (int v = 0; v < 8; ++v) {
+        const double f = value_of(geo.node_id(corner(c[0], 0, v & 1), corner(c[1], 1, (v >> 1) & 1),
+                                              corner(c[2], 2, (v >> 2) & 1)));
+        in += Inside(f, field.iso);
+        if (std::isfinite(f)) nearest = std::min(nearest, std::abs(f - field.iso));
+      }
+      // Same-side corners close to iso may hide a speck smaller than the block: keep it too.
+      if ((in != 0 && in != 8) || nearest < o.search_value_margin) crossing.push_back(id);
     }
     // Dilate by the margin (at least one block).
     const int m = std::max(1, (o.coarse_margin_cells + stride - 1) / stride);
@@ -447,6 +451,8 @@ std::string MeshingOptions::validate() const {
     return "tile cells must be a multiple of block cells, at most 256";
   if (coarse_margin_cells < 0) return "coarse margin must be >= 0";
   if (search_min_cells < 1) return "search min cells must be >= 1";
+  if (!(search_value_margin >= 0) || !std::isfinite(search_value_margin))
+    return "search value margin must be finite and >= 0";
   double longest = 0;
   for (int a = 0; a < 3; ++a) longest = std::max(longest, max_corner[a] - min_corner[a]);
   for (int a = 0; a < 3; ++a)

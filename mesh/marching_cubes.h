@@ -41,6 +41,9 @@ struct MeshingOptions {
                                       // when the stride would fall below block_cells)
   int block_cells = 2;                // sparse: the finest block kept or skipped (power of 2,
                                       // <= search_stride, divides tile_cells)
+  double search_value_margin = 2.0;   // sparse: also keep a block whose corners are all on one side
+                                      // when one of them lies within this of iso (field units; 0: off).
+                                      // Catches specks smaller than a block near the surface.
   bool show_progress = false;         // Progress on stderr (quijibo/progress.h)
   std::string validate() const;       // empty when valid, else what is wrong
 };
