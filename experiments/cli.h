@@ -26,6 +26,10 @@ void AddModulusCommands(CLI::App& app);  // modulus, portal, compare, bench modu
 void AddJuliaCommands(CLI::App& app);   // mesh, picture, bench mesh (after AddBenchCommand)
 void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/run_cmd.cpp)
 
+// Reads, validates and resolves an experiment file (every default filled in, every path absolute);
+// throws quijibo::Error "<file>: <JSON pointer>: <what>" on the first problem (run_cmd.cpp).
+nlohmann::json ResolveExperiment(const std::string& path);
+
 // `quijibo mesh` with another mesher (quijibo-mpi, docs/mpi.md). The mesher meshes exactly like
 // MeshField (mesh, summary, band when not null) and returns false on processes that must not write
 // (MPI workers); it may add other processes' counts into `stats`.

@@ -199,8 +199,8 @@ void AddMesh(CLI::App& app, const Mesher& mesher) {
   c->add_option("--search-stride", a->meshing.search_stride, "Coarsest lattice of the sparse search, cells")
       ->capture_default_str();
   c->add_option("--value-margin", a->meshing.search_value_margin,
-                "Sparse search: also refine same-side blocks with a corner this close to iso (0: off)")
-      ->capture_default_str();
+                "Sparse search: also refine same-side blocks with a corner this close to iso (0: off; default: the "
+                "field's, 2 for log|q_n|)");
   c->add_flag("--ply-double", a->ply_double, "PLY coordinates as double (default float)");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
   a->j.add(c);

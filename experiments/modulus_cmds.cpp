@@ -14,6 +14,7 @@
 #include <unordered_map>
 
 #include "experiments/cli.h"
+#include "mesh/julia_field.h"
 #include "mesh/marching_cubes.h"
 #include "mesh/sdf.h"
 #include "mesh/sdf_command.h"
@@ -171,6 +172,7 @@ Versor MakeVersor(const VersorArgs& a, const ModulusTarget& target) {
 BatchField MakeField(std::shared_ptr<const QuaternionMap> map, const IterationOptions& o, double point_scale) {
   BatchField f;
   f.iso = 0.0;
+  f.value_margin = kLogModulusValueMargin;
   f.evaluate = [map, o, point_scale](const Vec3* p, std::size_t n, double* out) {
     for (std::size_t i = 0; i < n; ++i)
       out[i] = IterateField(*map, {point_scale * p[i][0], point_scale * p[i][1], point_scale * p[i][2], 0.0}, o);

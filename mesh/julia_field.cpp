@@ -6,6 +6,7 @@ BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, d
                           JuliaFieldStats* stats) {
   BatchField field;
   field.iso = iso;
+  field.value_margin = kLogModulusValueMargin;
   DispatchPrecision(precision, [&]<class Real>() {
     auto jm = std::make_shared<const JuliaMap<Real>>(map, options);
     field.evaluate = [jm, stats](const Vec3* points, std::size_t n, double* values) {

@@ -12,6 +12,11 @@
 
 namespace quijibo {
 
+// BatchField::value_margin of log-modulus fields (this one, the shape modulus, portals): sub-cell
+// specks of the set sit next to outside nodes with log|q_m| up to ~0.2 (docs/meshing.md); few
+// same-side blocks have a corner within 2, so the margin costs little.
+inline constexpr double kLogModulusValueMargin = 2.0;
+
 // What the field saw, counted across threads.
 struct JuliaFieldStats {
   std::atomic<std::int64_t> evaluations{0};

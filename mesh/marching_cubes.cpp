@@ -211,6 +211,7 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
     candidates.resize(std::size_t(g.count[0] * g.count[1] * g.count[2]));
     for (std::size_t i = 0; i < candidates.size(); ++i) candidates[i] = std::int64_t(i);
   }
+  const double value_margin = o.search_value_margin >= 0 ? o.search_value_margin : field.value_margin;
   Progress progress("mesh: sparse search", 1.0, !o.show_progress);
   double done = 0.0;
   for (;;) {
@@ -260,7 +261,7 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
         if (std::isfinite(f)) nearest = std::min(nearest, std::abs(f - field.iso));
       }
       // Same-side corners close to iso may hide a speck smaller than the block: keep it too.
-      if ((in != 0 && in != 8) || nearest < o.search_value_margin) crossing.push_back(id);
+      if ((in != 0 && in != 8) || nearest < value_margin) crossing.push_back(id);
     }
     // Dilate by the margin (at least one block).
     const int m = std::max(1, (o.coarse_margin_cells + stride - 1) / stride);
@@ -451,8 +452,7 @@ std::string MeshingOptions::validate() const {
     return "tile cells must be a multiple of block cells, at most 256";
   if (coarse_margin_cells < 0) return "coarse margin must be >= 0";
   if (search_min_cells < 1) return "search min cells must be >= 1";
-  if (!(search_value_margin >= 0) || !std::isfinite(search_value_margin))
-    return "search value margin must be finite and >= 0";
+  if (!std::isfinite(search_value_margin)) return "search value margin must be finite (negative: the field's)";
   double longest = 0;
   for (int a = 0; a < 3; ++a) longest = std::max(longest, max_corner[a] - min_corner[a]);
   for (int a = 0; a < 3; ++a)

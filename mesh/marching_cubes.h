@@ -23,6 +23,10 @@ struct BatchField {
   // must be thread-safe. Non-finite values are allowed (they count as "outside" and are reported).
   std::function<void(const Vec3* points, std::size_t n, double* values)> evaluate;
   double iso = 0.0;
+  // Added by issue 5: the sparse search also refines blocks whose corners are all on one side when
+  // one of them lies within this of iso (field units; 0: off). Fields with sub-cell detail near
+  // the surface set it (log|q_n| fields: 2.0, julia_field.h); a distance field keeps 0.
+  double value_margin = 0.0;
 };
 
 struct MeshingOptions {
@@ -41,9 +45,7 @@ struct MeshingOptions {
                                       // when the stride would fall below block_cells)
   int block_cells = 2;                // sparse: the finest block kept or skipped (power of 2,
                                       // <= search_stride, divides tile_cells)
-  double search_value_margin = 2.0;   // sparse: also keep a block whose corners are all on one side
-                                      // when one of them lies within this of iso (field units; 0: off).
-                                      // Catches specks smaller than a block near the surface.
+  double search_value_margin = -1.0;  // sparse: overrides BatchField::value_margin when >= 0
   bool show_progress = false;         // Progress on stderr (quijibo/progress.h)
   std::string validate() const;       // empty when valid, else what is wrong
 };
