@@ -125,7 +125,7 @@ struct MeshArgs {
   std::string map, out, obj, vdb, frame = "user", box, summary;
   JuliaArgs j;
   MeshingOptions meshing;
-  bool dense = false, ply_double = false;
+  bool dense = false, ply_double = false, allow_empty = false;
 };
 
 struct MeshRun {
@@ -201,7 +201,13 @@ void AddMesh(CLI::App& app, const Mesher& mesher) {
   c->add_option("--value-margin", a->meshing.search_value_margin,
                 "Sparse search: also refine same-side blocks with a corner this close to iso (0: off; default: the "
                 "field's, 2 for log|q_n|)");
+  c->add_flag("--keep-specks", [a](std::int64_t) { a->meshing.remove_specks = false; },
+              "Keep the components that enclose a single lattice node (removed by default: sub-cell specks "
+              "that depend on where the lattice falls)");
   c->add_flag("--ply-double", a->ply_double, "PLY coordinates as double (default float)");
+  c->add_flag("--allow-empty", a->allow_empty,
+              "A surface that does not cross the box is a result, not an error: write the summary (0 "
+              "triangles) and no mesh files");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
   a->j.add(c);
   c->callback([a, mesher] {
@@ -212,16 +218,22 @@ void AddMesh(CLI::App& app, const Mesher& mesher) {
     a->meshing.show_progress = true;
     MeshRun run;
     if (!RunMesh(*a, map, !a->vdb.empty(), mesher, run)) return;
-    if (run.mesh.triangles.empty())
+    const bool empty = run.mesh.triangles.empty();
+    if (empty && !a->allow_empty)
       throw Error(a->map + ": the surface log|q_n| = " + std::to_string(a->j.iso) +
                   " does not cross the box (no triangles); nothing written");
     const bool user = a->frame == "user";
     PlaceVertices(run.mesh, a->j.julia, map.frame, user);
     // Write.
-    if (Extension(a->out) == ".obj") WriteObj(a->out, run.mesh);
-    else WritePly(a->out, run.mesh, a->ply_double ? PlyPrecision::kFloat64 : PlyPrecision::kFloat32);
-    if (!a->obj.empty()) WriteObj(a->obj, run.mesh);
-    if (!a->vdb.empty()) {
+    if (empty) {
+      std::fprintf(stderr, "quijibo: the surface does not cross the box (no triangles): no mesh written\n");
+    } else if (Extension(a->out) == ".obj") {
+      WriteObj(a->out, run.mesh);
+    } else {
+      WritePly(a->out, run.mesh, a->ply_double ? PlyPrecision::kFloat64 : PlyPrecision::kFloat32);
+    }
+    if (!a->obj.empty() && !empty) WriteObj(a->obj, run.mesh);
+    if (!a->vdb.empty() && !empty) {
       const MeshLattice& l = run.band.lattice;
       Vec3 origin = l.origin;
       double spacing = l.spacing;
@@ -235,10 +247,11 @@ void AddMesh(CLI::App& app, const Mesher& mesher) {
     const MeshTopology topo = AnalyzeTopology(run.mesh);
     const MeshingSummary& s = run.summary;
     const json summary = {
-        {"map", a->map}, {"out", a->out}, {"frame", a->frame}, {"julia", a->j.to_json()},
+        {"map", a->map}, {"out", empty ? json(nullptr) : json(a->out)}, {"frame", a->frame}, {"julia", a->j.to_json()},
         {"box", {{"min", a->meshing.min_corner}, {"max", a->meshing.max_corner}}},
         {"resolution", a->meshing.resolution}, {"cells", s.cells}, {"spacing", s.spacing},
         {"sparse", a->meshing.sparse}, {"vertices", s.vertices}, {"triangles", s.triangles},
+        {"specks_removed", s.specks_removed},
         {"boundary_edges", topo.boundary_edges}, {"non_manifold_edges", topo.non_manifold_edges},
         {"evaluations", {{"nodes", s.nodes_evaluated}, {"search", s.search_evaluations},
                          {"bisection", s.bisection_evaluations}, {"escaped", run.escaped},

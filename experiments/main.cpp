@@ -1,4 +1,5 @@
 // quijibo: from a mesh to a quaternion Julia set of its shape.
+#include <csignal>
 #include <cstdio>
 #include <exception>
 
@@ -7,6 +8,9 @@
 #include "quijibo/progress.h"
 
 int main(int argc, char** argv) {
+  // Under a file-size limit (ulimit -f) an over-long write then fails with EFBIG and is reported
+  // like a full disk (file and reason, no partial file), instead of SIGXFSZ killing us mid-file.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{
       "quijibo: quaternion Julia sets shaped like a mesh (QUIJIBO, Kim 2015), with the shape\n"
       "modulus (2023) and portals (2024) for comparison. See README.md and docs/."};

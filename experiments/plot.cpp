@@ -387,6 +387,8 @@ ConvergenceLog ReadConvergenceLog(const std::string& path) {
         break;
       }
       throw Error(where + ": invalid JSON: " + what);
+    } catch (const json::exception& e) {  // e.g. a number too large for a double
+      throw Error(where + ": invalid JSON: " + e.what());
     }
     const JsonReader r(j, where);
     if (!j.is_object()) r.fail("", "expected a JSON object, found " + JsonReader::describe(j));

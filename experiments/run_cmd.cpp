@@ -855,7 +855,8 @@ void Runner::RunQuijibo() {
                                     "--iso=" + Num(mesh["iso"]),
                                     "--frame", mesh["frame"],
                                     "--precision", mesh["precision"],
-                                    "--summary", dir + "/summary.json"};
+                                    "--summary", dir + "/summary.json",
+                                    "--allow-empty"};  // an empty set is a result: the report says so
       if (mesh["vdb"].get<bool>()) a.insert(a.end(), {"--vdb", dir + "/julia.vdb"});
       if (mesh["obj"].get<bool>()) a.insert(a.end(), {"--obj", dir + "/julia.obj"});
       RunCommand(a, dir + "/mesh.out");
@@ -872,7 +873,7 @@ void Runner::RunQuijibo() {
       RunCommand({"picture", "slice", P("initial/map.json"), "--target", P("initial/target.qgrid"), "-n", n,
                   "--size", Int(pics["slice_size"]), "-o", dir + "/initial-slice-n" + n + ".png"},
                  dir + "/initial-slice.out");
-      if (!mesh_hash.empty())
+      if (!mesh_hash.empty() && fs::exists(P("mesh/julia.ply")))
         RunCommand({"picture", "render", P("mesh/julia.ply"), "-o", dir + "/render.png", "--size",
                     Int(pics["render_size"]), "--views", Int(pics["render_views"])},
                    dir + "/render.out");
@@ -1021,7 +1022,12 @@ void Runner::WriteReport(double total_seconds) {
     image("plot/convergence.png", "convergence: (psi+1)/2 per step (line: current level, dashed: finest grid)");
   }
   const json ms = ReadStageFile(P("mesh/summary.json"));
-  if (ms.is_object()) {
+  if (ms.is_object() && ms.value("triangles", 0LL) == 0) {
+    md << "## Mesh\n\n**No surface:** log|q_n| = " << Num(ms["julia"].value("iso", 0.0)) << " does not cross the box at n = "
+       << ms["julia"].value("iterations", 0) << " (" << ms.value("resolution", 0)
+       << "^3 cells): the set is empty there or fills it. Try fewer iterations (`mesh.iterations`), or look at "
+          "the slice pictures.\n\n";
+  } else if (ms.is_object()) {
     md << "## Mesh\n\n`mesh/julia.ply`" << (exists("mesh/julia.vdb") ? ", `mesh/julia.vdb`" : "")
        << (exists("mesh/julia.obj") ? ", `mesh/julia.obj`" : "") << " (" << ms.value("frame", std::string("user"))
        << " frame): " << ms.value("vertices", 0LL) << " vertices, " << ms.value("triangles", 0LL) << " triangles, "

@@ -467,7 +467,8 @@ std::string MeshingSummary::report() const {
     << blocks_total << "\n"
     << "field evaluations " << nodes_evaluated << " at nodes (" << search_evaluations << " in the search) + "
     << bisection_evaluations << " in bisection, non-finite " << non_finite_values << "\n"
-    << "vertices " << vertices << ", triangles " << triangles << ", " << seconds << " s\n";
+    << "vertices " << vertices << ", triangles " << triangles << ", one-node specks removed " << specks_removed
+    << ", " << seconds << " s\n";
   return s.str();
 }
 
@@ -580,6 +581,68 @@ TilePiece MeshTilePiece(const BatchField& field, const TilePlan& plan, std::size
   return piece;
 }
 
+// Removes the components that enclose a single lattice node: 6 vertices on the 6 edges of that
+// node and 8 triangles. Such a speck is smaller than a cell and exists in the mesh only because a
+// node happened to fall into it (log|q_n| is steep enough to make one-node islands and bubbles
+// common); the sparse search cannot promise to find them and a shifted lattice would not see
+// them, so neither mode keeps them. `edges[v]` is vertex v's edge id (sorted). Returns how many.
+std::int64_t RemoveNodeSpecks(const MeshLattice& l, const std::vector<std::int64_t>& edges, TriangleMesh& mesh) {
+  const std::size_t nv = mesh.vertices.size();
+  std::vector<int> parent(nv);
+  for (std::size_t v = 0; v < nv; ++v) parent[v] = int(v);
+  auto find = [&](int v) {
+    while (parent[std::size_t(v)] != v) v = parent[std::size_t(v)] = parent[std::size_t(parent[std::size_t(v)])];
+    return v;
+  };
+  for (const auto& t : mesh.triangles)
+    for (int k = 1; k < 3; ++k) {
+      const int a = find(t[0]), b = find(t[k]);
+      if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b);
+    }
+  std::vector<int> verts(nv, 0), tris(nv, 0);
+  for (std::size_t v = 0; v < nv; ++v) ++verts[std::size_t(find(int(v)))];
+  for (const auto& t : mesh.triangles) ++tris[std::size_t(find(t[0]))];
+  const std::int64_t nx = l.cells[0] + 1, ny = l.cells[1] + 1;
+  const std::int64_t step[3] = {1, nx, nx * ny};
+  // Candidate components: 6 vertices, 8 triangles, and one node shared by all 6 edges.
+  std::vector<std::vector<std::int64_t>> ends(nv);
+  std::vector<char> speck(nv, 0);
+  for (std::size_t v = 0; v < nv; ++v) {
+    const int root = find(int(v));
+    if (verts[std::size_t(root)] == 6 && tris[std::size_t(root)] == 8) {
+      const std::int64_t node = edges[v] / 3;
+      ends[std::size_t(root)].push_back(node);
+      ends[std::size_t(root)].push_back(node + step[edges[v] % 3]);
+    }
+  }
+  std::int64_t removed = 0;
+  for (std::size_t r = 0; r < nv; ++r) {
+    auto& e = ends[r];
+    if (e.size() != 12) continue;
+    std::sort(e.begin(), e.end());
+    for (std::size_t i = 0; i + 5 < e.size(); ++i)
+      if (e[i] == e[i + 5]) {
+        speck[r] = 1;
+        ++removed;
+        break;
+      }
+  }
+  if (!removed) return 0;
+  std::vector<int> remap(nv, -1);
+  std::size_t kept = 0;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (!speck[std::size_t(find(int(v)))]) {
+      remap[v] = int(kept);
+      mesh.vertices[kept++] = mesh.vertices[v];
+    }
+  mesh.vertices.resize(kept);
+  std::size_t kt = 0;
+  for (const auto& t : mesh.triangles)
+    if (remap[std::size_t(t[0])] >= 0) mesh.triangles[kt++] = {remap[std::size_t(t[0])], remap[std::size_t(t[1])], remap[std::size_t(t[2])]};
+  mesh.triangles.resize(kt);
+  return removed;
+}
+
 TriangleMesh WeldTilePieces(const TilePlan& plan, std::vector<TilePiece>& pieces, MeshingSummary* summary,
                             FieldBand* band) {
   if (pieces.size() != plan.tile_ids.size()) throw Error("meshing: weld: expected one piece per planned tile");
@@ -622,6 +685,7 @@ TriangleMesh WeldTilePieces(const TilePlan& plan, std::vector<TilePiece>& pieces
     r.vertex_positions = {};
     r.triangles = {};
   }
+  const std::int64_t specks = plan.options.remove_specks ? RemoveNodeSpecks(plan.lattice, edges, mesh) : 0;
   if (band) {
     band->lattice = plan.lattice;
     band->nodes.clear();
@@ -643,6 +707,7 @@ TriangleMesh WeldTilePieces(const TilePlan& plan, std::vector<TilePiece>& pieces
     s.tiles_meshed = std::int64_t(plan.tile_ids.size());
     s.blocks_total = plan.blocks_total;
     s.blocks_active = blocks_active;
+    s.specks_removed = specks;
     s.vertices = std::int64_t(mesh.vertices.size());
     s.triangles = std::int64_t(mesh.triangles.size());
     s.cells = plan.lattice.cells;

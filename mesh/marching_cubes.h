@@ -46,6 +46,8 @@ struct MeshingOptions {
   int block_cells = 2;                // sparse: the finest block kept or skipped (power of 2,
                                       // <= search_stride, divides tile_cells)
   double search_value_margin = -1.0;  // sparse: overrides BatchField::value_margin when >= 0
+  bool remove_specks = true;          // drop components enclosing a single lattice node (sub-cell
+                                      // specks a node fell into by chance; docs/meshing.md)
   bool show_progress = false;         // Progress on stderr (quijibo/progress.h)
   std::string validate() const;       // empty when valid, else what is wrong
 };
@@ -61,6 +63,7 @@ struct MeshingSummary {
   std::int64_t blocks_active = 0;       // blocks meshed (sparse), of blocks_total
   std::int64_t blocks_total = 0;
   std::int64_t vertices = 0, triangles = 0;
+  std::int64_t specks_removed = 0;      // one-node components dropped (remove_specks)
   int search_stride = 0;                // the stride the sparse search used (0: dense)
   std::array<int, 3> cells{0, 0, 0};    // cells per axis of the lattice meshed
   double spacing = 0.0;                 // cell side

@@ -35,11 +35,13 @@ class CachedEnergy {
   // Throws quijibo::Error if x has the wrong size or a non-finite entry.
   Evaluation<Real> Evaluate(const Vector& x, EnergyMode mode = EnergyMode::kFull,
                             bool with_gradient = true) const;
-  Evaluation<Real> Evaluate(const Eigen::VectorXd& x, EnergyMode mode = EnergyMode::kFull,
-                            bool with_gradient = true) const
-    requires(!std::is_same_v<Real, double>)
-  {
-    return Evaluate(Vector(x.cast<Real>()), mode, with_gradient);
+  // (A template so that clang, which mangles a constrained non-template member like its sibling
+  // when Real = double, can compile the explicit instantiations.)
+  template <class D = double>
+    requires(std::is_same_v<D, double> && !std::is_same_v<Real, double>)
+  Evaluation<Real> Evaluate(const Eigen::Matrix<D, Eigen::Dynamic, 1>& x, EnergyMode mode = EnergyMode::kFull,
+                            bool with_gradient = true) const {
+    return Evaluate(Vector(x.template cast<Real>()), mode, with_gradient);
   }
 
   // Replaces the weights (one per grid cell) and eta, e.g. for the reweighted pass.

@@ -108,6 +108,12 @@ json ParseJson(const std::string& text, const std::string& source) {
     if (p != std::string::npos) what = what.substr(p);
     throw Error(source + ":" + std::to_string(line) + ":" + std::to_string(col) +
                 ": invalid JSON: " + what);
+  } catch (const json::exception& e) {
+    // Not a syntax error but a value the parser cannot hold, e.g. 1e99999 (number overflow).
+    std::string what = e.what();
+    const auto p = what.find("] ");
+    if (p != std::string::npos) what = what.substr(p + 2);
+    throw Error(source + ": invalid JSON: " + what);
   }
 }
 

@@ -12,10 +12,9 @@ row() {  # description, file name, file content ('' = no file), command...
   local what=$1 name=$2 content=$3
   shift 3
   [ -n "$content" ] && printf '%s\n' "$content" > "$name"
-  local msg
-  msg=$("$@" 2>&1 >/dev/null | sed 's#'"$T"'/##g; s#'"$ROOT"'/##g' | tr '\n' ' ' | sed 's/ *$//')
-  local rc=${PIPESTATUS[0]}
-  "$@" >/dev/null 2>&1; rc=$?
+  local msg rc
+  "$@" >/dev/null 2>"$T/.stderr"; rc=$?
+  msg=$(sed 's#'"$T"'/##g; s#'"$ROOT"'/##g' "$T/.stderr" | tr '\n' ' ' | sed 's/ *$//')
   local shown=${content:-(none)}
   printf '| %s | `%s` | %s | `%s` |\n' "$what" "$(echo "$shown" | sed 's/|/\\|/g')" "$rc" "$(echo "$msg" | sed 's/|/\\|/g')"
 }
@@ -30,6 +29,8 @@ echo
 echo "| input | experiment file | exit | message |"
 echo "|---|---|---|---|"
 row "missing file" none.json "" "$Q" run none.json --out out
+mkdir -p folder.json
+row "a folder, not a file" folder.json "" "$Q" run folder.json --out out
 row "syntax error" syntax.json '{"name": "x",' "$Q" run syntax.json --out out
 row "NaN (not JSON)" nan.json '{"target": {"analytic": "torus", "resolution": NaN}}' "$Q" run nan.json --out out
 row "not an object" array.json '[1, 2]' "$Q" run array.json --out out
@@ -60,6 +61,17 @@ row "monopoles without a mesh" mono.json "{$TORUS, \"initial\": {\"kind\": \"mon
 printf '{%s}\n' "$TORUS" > ok.json
 row "read-only results folder" ok.json "" "$Q" run ok.json --out /proc/sys/quijibo-results
 row "results path is a file" ok.json "" "$Q" run ok.json --out ok.json
+# A full disk: a 96 KiB tmpfs (needs root), else a file-size limit (ulimit -f), which fails writes
+# the same way (EFBIG instead of ENOSPC).
+mkdir -p disk
+if mount -t tmpfs -o size=96k tmpfs disk 2>/dev/null; then
+  row "full disk (96 KiB tmpfs)" ok.json "" "$Q" run ok.json --out disk/results
+  umount disk
+else
+  row "file-size limit (ulimit -f 24)" ok.json "" sh -c "ulimit -f 24; exec \"$Q\" run ok.json --out disk/results"
+fi
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\n' > open-box.obj
+row "mesh with a large hole (a box without its lid)" holes.json '{"target": {"mesh": "open-box.obj", "resolution": 16}}' "$Q" run holes.json --out out
 echo
 echo "## Other commands"
 echo
@@ -67,6 +79,7 @@ echo "| input | file | exit | message |"
 echo "|---|---|---|---|"
 row "sdf: missing mesh" none.obj "" "$Q" sdf none.obj -o x.qgrid
 row "sdf: garbage mesh" garbage.obj "" "$Q" sdf garbage.obj -o x.qgrid
+row "sdf: mesh with a large hole" open-box.obj "" "$Q" sdf open-box.obj -o x.qgrid -r 16
 row "sdf: zero resolution" garbage.obj "" "$Q" sdf "$ROOT/data/bunny.obj" -o x.qgrid -r 0
 row "optimize: missing map" none.json "" "$Q" optimize -t torus -m none.json -o opt
 row "optimize: empty schedule" none.json "" "$Q" optimize -t torus -m none.json -s "" -o opt

@@ -1,9 +1,12 @@
 // `quijibo run`: a tiny experiment end to end, stage reuse by content hash, bad experiments (one
-// clear line, non-zero exit, no results folder), kill and --resume, a read-only results folder.
+// clear line, non-zero exit, no results folder), kill and --resume, a read-only or full results
+// folder.
 // Tiny settings throughout (analytic torus, 20^3, a few iterations) so the suite stays fast.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/mount.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -226,6 +229,94 @@ TEST(RunTest, AReadOnlyResultsFolderIsAClearError) {
   EXPECT_FALSE(fs::exists(out + "/sub"));
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   ::chmod((dir + "/locked").c_str(), 0755);
+  fs::remove_all(dir);
+}
+
+// A Julia set whose surface misses the box is a result, not a failure: the run finishes, the report
+// says so, and there is no mesh file and no render.
+TEST(RunTest, AJuliaSetWithoutSurfaceIsReportedNotFatal) {
+  const std::string dir = TempDir("nosurface");
+  const std::string exp = dir + "/tiny.json", out = dir + "/results";
+  json e = Tiny();
+  e["optimizer"]["schedule"] = "10(V)";
+  e["mesh"]["iso"] = -60.0;  // log|q_1| never gets this low in the box: nothing is inside
+  Write(exp, e.dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  EXPECT_FALSE(fs::exists(out + "/mesh/julia.ply"));
+  EXPECT_FALSE(fs::exists(out + "/pictures/render.png"));
+  EXPECT_TRUE(fs::exists(out + "/pictures/slice-n1.png"));
+  EXPECT_EQ(json::parse(Slurp(out + "/mesh/summary.json"))["triangles"], 0);
+  EXPECT_NE(Slurp(out + "/report.md").find("No surface"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// Runs `quijibo run EXP --out OUT [--resume] --quiet` with files limited to `max_file_bytes` (0: no
+// limit; RLIMIT_FSIZE with SIGXFSZ ignored, so an over-long write fails with EFBIG as a write to a
+// full disk fails with ENOSPC). Returns the exit status; stderr in *err.
+int RunLimited(const std::string& exp, const std::string& out, bool resume, rlim_t max_file_bytes, std::string* err) {
+  const std::string err_path =
+      (fs::temp_directory_path() / ("quijibo_run_stderr_limited_" + std::to_string(::getpid()))).string();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (max_file_bytes) {
+      const rlimit limit{max_file_bytes, max_file_bytes};
+      setrlimit(RLIMIT_FSIZE, &limit);
+      signal(SIGXFSZ, SIG_IGN);
+    }
+    const int fd = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, STDERR_FILENO);
+    const int null = open("/dev/null", O_WRONLY);
+    dup2(null, STDOUT_FILENO);
+    std::vector<std::string> args = {QUIJIBO_BINARY, "run", exp, "--out", out, "--quiet"};
+    if (resume) args.push_back("--resume");
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    execv(QUIJIBO_BINARY, argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  *err = Slurp(err_path);
+  fs::remove(err_path);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// No temporary file, no truncated JSON: what a failed run leaves is whole.
+void ExpectNothingPartial(const std::string& out) {
+  if (!fs::exists(out)) return;
+  for (const auto& e : fs::recursive_directory_iterator(out)) {
+    const std::string p = e.path().string();
+    EXPECT_EQ(p.find(".tmp."), std::string::npos) << p;
+    if (e.is_regular_file() && e.path().extension() == ".json") {
+      EXPECT_TRUE(json::accept(Slurp(p))) << p;
+    }
+  }
+}
+
+// The results folder fills up mid-run: one clear line naming the file and the system's reason, no
+// partial file; once there is room, --resume finishes the run. A real full disk (a 96 KiB tmpfs)
+// when the test may mount one (root), else a file-size limit, which fails writes the same way.
+TEST(RunTest, AFullDiskIsAClearErrorAndResumeFinishesTheRun) {
+  const std::string dir = TempDir("full");
+  const std::string exp = dir + "/tiny.json";
+  Write(exp, Tiny().dump(1));
+  const std::string disk = dir + "/disk", out = disk + "/results";
+  fs::create_directories(disk);
+  const bool tmpfs = ::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=96k") == 0;
+  std::string err;
+  EXPECT_EQ(RunLimited(exp, out, false, tmpfs ? 0 : 24 * 1024, &err), 1) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find(tmpfs ? "No space left on device" : "File too large"), std::string::npos) << err;
+  EXPECT_NE(err.find(disk), std::string::npos) << "the message names the file: " << err;
+  ExpectNothingPartial(out);
+  if (tmpfs) ::mount("tmpfs", disk.c_str(), "tmpfs", MS_REMOUNT, "size=64m");
+  EXPECT_EQ(RunLimited(exp, out, true, 0, &err), 0) << err;
+  EXPECT_TRUE(fs::exists(out + "/report.md"));
+  EXPECT_TRUE(fs::exists(out + "/mesh/julia.ply"));
+  ExpectNothingPartial(out);
+  if (tmpfs) ::umount(disk.c_str());
   fs::remove_all(dir);
 }
 

@@ -107,6 +107,40 @@ TEST(MarchingCubes, GyroidIsClosedAndManifold) {
   EXPECT_EQ(Euler(m, t) % 2, 0);
 }
 
+// A sphere with one inside node and one outside node far from it (a speck and a bubble smaller
+// than a cell): the mesher drops both one-node components unless asked to keep them, and keeps a
+// two-node speck.
+TEST(MarchingCubes, OneNodeSpecksAreRemovedUnlessKept) {
+  MeshingOptions o;  // box [-2, 2]^3, 32 cells: nodes at multiples of 0.125
+  o.resolution = 32;
+  o.tile_cells = 16;
+  o.sparse = false;
+  auto at = [](const Vec3& p, double x, double y, double z) {
+    return std::abs(p[0] - x) < 1e-9 && std::abs(p[1] - y) < 1e-9 && std::abs(p[2] - z) < 1e-9;
+  };
+  const BatchField field = Lambda([&](const Vec3& p) {
+    if (at(p, 1.5, 1.5, 1.5)) return -1.0;                          // a one-node speck outside the ball
+    if (at(p, 0.0, 0.0, 0.0)) return 1.0;                           // a one-node bubble inside it
+    if (at(p, -1.5, -1.5, 1.5) || at(p, -1.375, -1.5, 1.5)) return -1.0;  // a two-node speck
+    return Norm(p) - 1.0;
+  });
+  MeshingSummary removed, kept;
+  const TriangleMesh clean = MeshField(field, o, &removed);
+  o.remove_specks = false;
+  const TriangleMesh all = MeshField(field, o, &kept);
+  EXPECT_EQ(removed.specks_removed, 2);
+  EXPECT_EQ(kept.specks_removed, 0);
+  EXPECT_EQ(all.vertices.size() - clean.vertices.size(), 12u);
+  EXPECT_EQ(all.triangles.size() - clean.triangles.size(), 16u);
+  for (const Vec3& v : clean.vertices) EXPECT_GT(Norm(v), 0.5) << "the bubble is gone";
+  bool two_node = false;
+  for (const Vec3& v : clean.vertices) two_node |= v[0] < -1.2 && v[1] < -1.2 && v[2] > 1.2;
+  EXPECT_TRUE(two_node) << "a speck of two nodes is not a one-node speck";
+  const MeshTopology t = AnalyzeTopology(clean);
+  EXPECT_EQ(t.boundary_edges, 0);
+  EXPECT_EQ(t.non_manifold_edges, 0);
+}
+
 TEST(MarchingCubes, DenseAndSparseAgree) {
   MeshingOptions o;
   o.resolution = 64;
