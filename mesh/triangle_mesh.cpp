@@ -67,34 +67,39 @@ void CollectNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& pa
     const aiMesh& am = *scene.mMeshes[node.mMeshes[m]];
     for (unsigned f = 0; f < am.mNumFaces; ++f) {
       const aiFace& face = am.mFaces[f];
-      if (face.mNumIndices != 3) {
+      if (face.mNumIndices < 3 || face.mIndices == nullptr) {
         ++report.non_triangles_ignored;
         continue;
       }
-      std::array<int, 3> tri;
-      for (int c = 0; c < 3; ++c) {
-        const unsigned vi = face.mIndices[c];
-        if (vi >= am.mNumVertices)
-          throw Error(path + ": face " + std::to_string(report.faces_read) + " uses vertex " +
-                      std::to_string(vi) + " but the mesh has " +
-                      std::to_string(am.mNumVertices) + " vertices");
-        aiVector3D a = am.mVertices[vi];
-        if (!identity) a = transform * a;
-        Vec3 p{double(a.x) + 0.0, double(a.y) + 0.0, double(a.z) + 0.0};  // +0.0 folds -0.0
-        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-          throw Error(path + ": vertex " + std::to_string(mesh.vertices.size()) +
-                      " (used by face " + std::to_string(report.faces_read) +
-                      ") has a non-finite coordinate " + FormatVec(p));
+      // Polygons as fans (0, k, k+1): the same boundary, so the same winding numbers for the SDF.
+      // (assimp's own triangulation aborts on some malformed files; found by fuzzing.)
+      for (unsigned k = 1; k + 1 < face.mNumIndices; ++k) {
+        std::array<int, 3> tri;
+        const unsigned corner[3] = {0, k, k + 1};
+        for (int c = 0; c < 3; ++c) {
+          const unsigned vi = face.mIndices[corner[c]];
+          if (vi >= am.mNumVertices)
+            throw Error(path + ": face " + std::to_string(report.faces_read) + " uses vertex " +
+                        std::to_string(vi) + " but the mesh has " +
+                        std::to_string(am.mNumVertices) + " vertices");
+          aiVector3D a = am.mVertices[vi];
+          if (!identity) a = transform * a;
+          Vec3 p{double(a.x) + 0.0, double(a.y) + 0.0, double(a.z) + 0.0};  // +0.0 folds -0.0
+          if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+            throw Error(path + ": vertex " + std::to_string(mesh.vertices.size()) +
+                        " (used by face " + std::to_string(report.faces_read) +
+                        ") has a non-finite coordinate " + FormatVec(p));
+          }
+          auto [it, inserted] = index_of.try_emplace(p, int(mesh.vertices.size()));
+          if (inserted)
+            mesh.vertices.push_back(p);
+          else
+            ++report.corners_welded;
+          tri[c] = it->second;
         }
-        auto [it, inserted] = index_of.try_emplace(p, int(mesh.vertices.size()));
-        if (inserted)
-          mesh.vertices.push_back(p);
-        else
-          ++report.corners_welded;
-        tri[c] = it->second;
+        mesh.triangles.push_back(tri);
+        ++report.faces_read;
       }
-      mesh.triangles.push_back(tri);
-      ++report.faces_read;
     }
   }
   for (unsigned c = 0; c < node.mNumChildren; ++c)
@@ -202,10 +207,11 @@ TriangleMesh ReadMesh(const std::string& path, MeshReadReport* report_out) {
   if (ext == ".ply") CheckPlyHeader(path);
   if (ext == ".off") CheckOffHeader(path);
 
-  // Only triangulation: no welding with tolerances, no reordering, no normal generation.
+  // No post-processing but validation: no welding with tolerances, no reordering, no normals;
+  // polygons are triangulated below.
   Assimp::Importer importer;
   const aiScene* scene =
-      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+      importer.ReadFile(path, aiProcess_ValidateDataStructure);
   if (scene == nullptr || scene->mRootNode == nullptr) {
     std::string why = importer.GetErrorString();
     std::replace(why.begin(), why.end(), '\n', ' ');
