@@ -136,18 +136,34 @@ void CheckCount(const std::string& path, const std::string& what, double count, 
                 std::to_string(size) + " bytes can hold");
 }
 
-// OFF: "[ST][C][N][4][n]OFF", then the vertex, face and edge counts.
+// OFF: a magic word containing "OFF" (assimp takes "OFF", "COFF", "NOFF", "OFF8", ...), then the
+// vertex and face counts, on the same line or the next one that is not blank or a comment. They
+// are read as doubles, so a number too large for assimp's 32 bits is refused, not wrapped.
 void CheckOffHeader(const std::string& path) {
   std::istringstream in(FileHead(path));
-  std::string magic;
-  in >> magic;
-  if (magic.size() < 3 || magic.compare(magic.size() - 3, 3, "OFF") != 0) return;  // assimp will say
-  double vertices = 0, faces = 0;
-  if (!(in >> vertices >> faces)) return;
+  std::string line;
+  if (!std::getline(in, line)) return;
+  const auto start = line.find_first_not_of(" \t\r");
+  if (start == std::string::npos) return;
+  const auto stop = std::min(line.find_first_of(" \t\r", start), line.size());
+  if (line.substr(start, stop - start).find("OFF") == std::string::npos) return;  // assimp will say
+  std::string rest = line.substr(stop);
+  auto blank = [](std::string& t) {
+    if (const auto hash = t.find('#'); hash != std::string::npos) t.resize(hash);
+    return t.find_first_not_of(" \t\r") == std::string::npos;
+  };
+  while (blank(rest))
+    if (!std::getline(in, rest)) return;
   std::error_code ec;
   const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  const char* p = rest.c_str();
+  char* end = nullptr;
+  const double vertices = std::strtod(p, &end);
+  if (end == p) return;
   CheckCount(path, "vertices", vertices, 6.0, size);  // "0 0 0\n"
-  CheckCount(path, "faces", faces, 8.0, size);        // "3 0 1 2\n"
+  p = end;
+  const double faces = std::strtod(p, &end);
+  if (end != p) CheckCount(path, "faces", faces, 8.0, size);  // "3 0 1 2\n"
 }
 
 // Debian's assimp 5.2 loops forever on a PLY whose header never ends (found by fuzzing,
