@@ -1,6 +1,8 @@
 #include "optim/optimizer.h"
 
+#include <cerrno>
 #include <csignal>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -249,9 +251,10 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   };
   auto emit = [&](json line) {
     line["seconds"] = elapsed();
+    errno = 0;
     log << line.dump() << "\n";
     log.flush();
-    if (!log) throw Error(paths.log + ": cannot write (disk full?)");
+    if (!log) throw Error(paths.log + ": cannot write: " + (errno ? std::strerror(errno) : "disk full?"));
   };
 
   // The finest grid with the original weights: the absolute energy and the reweighting.

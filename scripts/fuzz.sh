@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzzes a reader with libFuzzer (clang, ASan + UBSan), docs/bad-inputs.md:
+# Fuzzes a reader with libFuzzer (clang, ASan + UBSan), docs/fuzzing.md:
 #   scripts/fuzz.sh TARGET [SECONDS] [-- libFuzzer flags...]
 #   TARGET: mesh_reader (ReadMesh: OBJ/PLY/STL/OFF) | experiment (the experiment parser)
 # Builds build-fuzz/ (clang, -DQUIJIBO_FUZZ=ON), fuzzes for SECONDS (default 600) starting from the
