@@ -15,6 +15,14 @@
 #include <sstream>
 #include <unordered_map>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+
 #include "quijibo/error.h"
 #include "quijibo/io.h"
 
@@ -207,6 +215,111 @@ void CheckPlyHeader(const std::string& path) {
   flush();
 }
 
+// assimp's import and our collection of its triangles (welded by exact position).
+void ImportWithAssimp(const std::string& path, TriangleMesh& mesh, MeshReadReport& report) {
+  // No post-processing but validation: no welding with tolerances, no reordering, no normals;
+  // polygons are triangulated by CollectNode.
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  if (scene == nullptr || scene->mRootNode == nullptr) {
+    std::string why = importer.GetErrorString();
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    throw Error(path + ": cannot read mesh: " + (why.empty() ? "unknown assimp error" : why));
+  }
+  std::unordered_map<Vec3, int, PositionHash> index_of;
+  CollectNode(*scene, *scene->mRootNode, aiMatrix4x4(), path, mesh, index_of, report);
+}
+
+bool WriteAll(int fd, const void* data, std::size_t n) {
+  const char* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    p += w;
+    n -= std::size_t(w);
+  }
+  return true;
+}
+
+// Runs ImportWithAssimp in a child process and takes its result through a pipe. assimp 5.2 (Debian)
+// hangs, aborts on internal asserts and corrupts its heap on some malformed files (found by
+// fuzzing, docs/fuzzing.md); in a child, each of these becomes an error naming the file instead of
+// a crash of quijibo. A hang is ended by a CPU-time limit.
+void ImportIsolated(const std::string& path, TriangleMesh& mesh, MeshReadReport& report) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw Error(path + ": cannot read mesh: pipe: " + std::strerror(errno));
+  std::error_code ec;
+  const double megabytes = double(std::filesystem::file_size(path, ec)) / 1e6;
+  const rlim_t cpu_seconds = rlim_t(120.0 + 20.0 * megabytes);
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw Error(path + ": cannot read mesh: fork: " + std::strerror(errno));
+  if (pid == 0) {
+    ::close(fds[0]);
+    const rlimit limit{cpu_seconds, cpu_seconds + 5};
+    ::setrlimit(RLIMIT_CPU, &limit);
+    std::string message;
+    TriangleMesh m;
+    MeshReadReport r;
+    try {
+      ImportWithAssimp(path, m, r);
+    } catch (const Error& e) {
+      message = e.what();
+    } catch (const std::exception& e) {
+      message = path + ": cannot read mesh: " + e.what();
+    }
+    const std::int64_t head[6] = {message.empty() ? 0 : 1, std::int64_t(message.size()), std::int64_t(m.vertices.size()),
+                                  std::int64_t(m.triangles.size()), r.faces_read, r.non_triangles_ignored};
+    const std::int64_t welded = r.corners_welded;
+    bool ok = WriteAll(fds[1], head, sizeof head) && WriteAll(fds[1], &welded, sizeof welded) &&
+              WriteAll(fds[1], message.data(), message.size());
+    if (ok && message.empty())
+      ok = WriteAll(fds[1], m.vertices.data(), m.vertices.size() * sizeof(Vec3)) &&
+           WriteAll(fds[1], m.triangles.data(), m.triangles.size() * sizeof(std::array<int, 3>));
+    ::_exit(ok ? 0 : 3);
+  }
+  ::close(fds[1]);
+  std::string bytes;
+  char buffer[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    bytes.append(buffer, std::size_t(n));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(status)) {
+    const int sig = WTERMSIG(status);
+    if (sig == SIGXCPU || sig == SIGKILL)
+      throw Error(path + ": cannot read mesh: the importer (assimp) ran for more than " + std::to_string(cpu_seconds) +
+                  " CPU seconds; the file is probably malformed");
+    throw Error(path + ": cannot read mesh: the importer (assimp) crashed on this file (" + strsignal(sig) +
+                "); the file is probably malformed");
+  }
+  std::int64_t head[7];
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || bytes.size() < sizeof head)
+    throw Error(path + ": cannot read mesh: the importer process failed");
+  std::memcpy(head, bytes.data(), sizeof head);
+  std::size_t at = sizeof head;
+  const auto message_size = std::size_t(head[1]);
+  if (head[0] != 0) throw Error(bytes.substr(at, message_size));
+  const auto nv = std::size_t(head[2]), nt = std::size_t(head[3]);
+  if (bytes.size() != at + nv * sizeof(Vec3) + nt * sizeof(std::array<int, 3>))
+    throw Error(path + ": cannot read mesh: the importer process returned a truncated result");
+  mesh.vertices.resize(nv);
+  mesh.triangles.resize(nt);
+  std::memcpy(mesh.vertices.data(), bytes.data() + at, nv * sizeof(Vec3));
+  at += nv * sizeof(Vec3);
+  std::memcpy(mesh.triangles.data(), bytes.data() + at, nt * sizeof(std::array<int, 3>));
+  report.faces_read = head[4];
+  report.non_triangles_ignored = head[5];
+  report.corners_welded = head[6];
+}
+
 }  // namespace
 
 TriangleMesh ReadMesh(const std::string& path, MeshReadReport* report_out) {
@@ -223,21 +336,9 @@ TriangleMesh ReadMesh(const std::string& path, MeshReadReport* report_out) {
   if (ext == ".ply") CheckPlyHeader(path);
   if (ext == ".off") CheckOffHeader(path);
 
-  // No post-processing but validation: no welding with tolerances, no reordering, no normals;
-  // polygons are triangulated below.
-  Assimp::Importer importer;
-  const aiScene* scene =
-      importer.ReadFile(path, aiProcess_ValidateDataStructure);
-  if (scene == nullptr || scene->mRootNode == nullptr) {
-    std::string why = importer.GetErrorString();
-    std::replace(why.begin(), why.end(), '\n', ' ');
-    throw Error(path + ": cannot read mesh: " + (why.empty() ? "unknown assimp error" : why));
-  }
-
   TriangleMesh mesh;
   MeshReadReport report;
-  std::unordered_map<Vec3, int, PositionHash> index_of;
-  CollectNode(*scene, *scene->mRootNode, aiMatrix4x4(), path, mesh, index_of, report);
+  ImportIsolated(path, mesh, report);
   if (mesh.triangles.empty())
     throw Error(path + ": mesh has no triangles" +
                 (report.non_triangles_ignored
