@@ -312,9 +312,9 @@ void ImportIsolated(const std::string& path, TriangleMesh& mesh, MeshReadReport&
     throw Error(path + ": cannot read mesh: the importer process returned a truncated result");
   mesh.vertices.resize(nv);
   mesh.triangles.resize(nt);
-  std::memcpy(mesh.vertices.data(), bytes.data() + at, nv * sizeof(Vec3));
+  if (nv) std::memcpy(mesh.vertices.data(), bytes.data() + at, nv * sizeof(Vec3));
   at += nv * sizeof(Vec3);
-  std::memcpy(mesh.triangles.data(), bytes.data() + at, nt * sizeof(std::array<int, 3>));
+  if (nt) std::memcpy(mesh.triangles.data(), bytes.data() + at, nt * sizeof(std::array<int, 3>));
   report.faces_read = head[4];
   report.non_triangles_ignored = head[5];
   report.corners_welded = head[6];
