@@ -43,6 +43,7 @@ status=0
   -max_total_time="$SECONDS_TO_RUN" -rss_limit_mb=4096 -timeout=30 -max_len=65536 \
   -artifact_prefix="$FINDINGS/" -print_final_stats=1 "$@" || status=$?
 # Keep a minimal corpus that covers what this run covered.
-"build-fuzz/tests/fuzz_$TARGET" -merge=1 "$KEPT" "$WORK" tests/fuzz/seeds/"$TARGET" "${DICT[@]}" >/dev/null 2>&1 || true
+"build-fuzz/tests/fuzz_$TARGET" -merge=1 -artifact_prefix="$FINDINGS/" "$KEPT" "$WORK" tests/fuzz/seeds/"$TARGET" "${DICT[@]}" \
+  >/dev/null 2>&1 || true
 echo "fuzz.sh: $TARGET: kept corpus $(ls "$KEPT" | wc -l) files; findings in $FINDINGS: $(ls "$FINDINGS" | wc -l)" >&2
 exit $status
