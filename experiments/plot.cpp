@@ -375,20 +375,12 @@ ConvergenceLog ReadConvergenceLog(const std::string& path) {
     const std::string where = path + ":" + std::to_string(n);
     json j;
     try {
-      j = json::parse(line);
-    } catch (const json::parse_error& e) {
-      std::string what = e.what();
-      const auto p = what.find("syntax error");
-      if (p != std::string::npos) what = what.substr(p);
-      if (n == last) {
-        std::fprintf(stderr, "quijibo: warning: %s: skipped the unparsable last line (a killed run?)\n",
-                     where.c_str());
-        log.truncated = true;
-        break;
-      }
-      throw Error(where + ": invalid JSON: " + what);
-    } catch (const json::exception& e) {  // e.g. a number too large for a double
-      throw Error(where + ": invalid JSON: " + e.what());
+      j = ParseJson(line, path, n);
+    } catch (const Error&) {
+      if (n != last) throw;
+      std::fprintf(stderr, "quijibo: warning: %s: skipped the unparsable last line (a killed run?)\n", where.c_str());
+      log.truncated = true;
+      break;
     }
     const JsonReader r(j, where);
     if (!j.is_object()) r.fail("", "expected a JSON object, found " + JsonReader::describe(j));

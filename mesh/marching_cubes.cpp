@@ -604,29 +604,25 @@ std::int64_t RemoveNodeSpecks(const MeshLattice& l, const std::vector<std::int64
   for (const auto& t : mesh.triangles) ++tris[std::size_t(find(t[0]))];
   const std::int64_t nx = l.cells[0] + 1, ny = l.cells[1] + 1;
   const std::int64_t step[3] = {1, nx, nx * ny};
-  // Candidate components: 6 vertices, 8 triangles, and one node shared by all 6 edges.
-  std::vector<std::vector<std::int64_t>> ends(nv);
-  std::vector<char> speck(nv, 0);
+  // Candidate components: 6 vertices and 8 triangles. A speck's 6 edges share one lattice node:
+  // list (component, edge end) for every candidate vertex, sort, and look for 6 equal entries.
+  std::vector<std::pair<int, std::int64_t>> ends;
   for (std::size_t v = 0; v < nv; ++v) {
     const int root = find(int(v));
     if (verts[std::size_t(root)] == 6 && tris[std::size_t(root)] == 8) {
       const std::int64_t node = edges[v] / 3;
-      ends[std::size_t(root)].push_back(node);
-      ends[std::size_t(root)].push_back(node + step[edges[v] % 3]);
+      ends.push_back({root, node});
+      ends.push_back({root, node + step[edges[v] % 3]});
     }
   }
+  std::sort(ends.begin(), ends.end());
+  std::vector<char> speck(nv, 0);
   std::int64_t removed = 0;
-  for (std::size_t r = 0; r < nv; ++r) {
-    auto& e = ends[r];
-    if (e.size() != 12) continue;
-    std::sort(e.begin(), e.end());
-    for (std::size_t i = 0; i + 5 < e.size(); ++i)
-      if (e[i] == e[i + 5]) {
-        speck[r] = 1;
-        ++removed;
-        break;
-      }
-  }
+  for (std::size_t i = 0; i + 5 < ends.size(); ++i)
+    if (ends[i] == ends[i + 5] && !speck[std::size_t(ends[i].first)]) {
+      speck[std::size_t(ends[i].first)] = 1;
+      ++removed;
+    }
   if (!removed) return 0;
   std::vector<int> remap(nv, -1);
   std::size_t kept = 0;

@@ -147,7 +147,7 @@ void CheckCount(const std::string& path, const std::string& what, double count, 
 // OFF: a magic word containing "OFF" (assimp takes "OFF", "COFF", "NOFF", "OFF8", ...), then the
 // vertex and face counts, on the same line or the next one that is not blank or a comment. They
 // are read as doubles, so a number too large for assimp's 32 bits is refused, not wrapped.
-void CheckOffHeader(const std::string& path) {
+void CheckOffHeader(const std::string& path, std::uintmax_t size) {
   std::istringstream in(FileHead(path));
   std::string line;
   if (!std::getline(in, line)) return;
@@ -162,8 +162,6 @@ void CheckOffHeader(const std::string& path) {
   };
   while (blank(rest))
     if (!std::getline(in, rest)) return;
-  std::error_code ec;
-  const std::uintmax_t size = std::filesystem::file_size(path, ec);
   const char* p = rest.c_str();
   char* end = nullptr;
   const double vertices = std::strtod(p, &end);
@@ -177,7 +175,7 @@ void CheckOffHeader(const std::string& path) {
 // Debian's assimp 5.2 loops forever on a PLY whose header never ends (found by fuzzing,
 // docs/fuzzing.md), so the header is checked first: "ply", then an "end_header" line within 64 KiB;
 // and the element counts must fit the file.
-void CheckPlyHeader(const std::string& path) {
+void CheckPlyHeader(const std::string& path, std::uintmax_t size) {
   const std::string head = FileHead(path);
   if (head.rfind("ply", 0) != 0 || (head.size() > 3 && head[3] != '\n' && head[3] != '\r'))
     throw Error(path + ": not a PLY file (it must start with a line \"ply\")");
@@ -192,8 +190,6 @@ void CheckPlyHeader(const std::string& path) {
   if (at == std::string::npos) throw Error(path + ": PLY header has no \"end_header\" line in its first 64 KiB");
   // Each element needs at least one byte per property (binary uchar; ASCII needs more).
   std::istringstream header(head.substr(0, at));
-  std::error_code ec;
-  const std::uintmax_t size = std::filesystem::file_size(path, ec);
   std::string line, name;
   double count = -1, properties = 0;
   auto flush = [&] {
@@ -246,11 +242,10 @@ bool WriteAll(int fd, const void* data, std::size_t n) {
 // hangs, aborts on internal asserts and corrupts its heap on some malformed files (found by
 // fuzzing, docs/fuzzing.md); in a child, each of these becomes an error naming the file instead of
 // a crash of quijibo. A hang is ended by a CPU-time limit.
-void ImportIsolated(const std::string& path, TriangleMesh& mesh, MeshReadReport& report) {
+void ImportIsolated(const std::string& path, std::uintmax_t size, TriangleMesh& mesh, MeshReadReport& report) {
   int fds[2];
   if (::pipe(fds) != 0) throw Error(path + ": cannot read mesh: pipe: " + std::strerror(errno));
-  std::error_code ec;
-  const double megabytes = double(std::filesystem::file_size(path, ec)) / 1e6;
+  const double megabytes = double(size) / 1e6;
   const rlim_t cpu_seconds = rlim_t(120.0 + 20.0 * megabytes);
   std::fflush(nullptr);
   const pid_t pid = ::fork();
@@ -269,11 +264,12 @@ void ImportIsolated(const std::string& path, TriangleMesh& mesh, MeshReadReport&
     } catch (const std::exception& e) {
       message = path + ": cannot read mesh: " + e.what();
     }
-    const std::int64_t head[6] = {message.empty() ? 0 : 1, std::int64_t(message.size()), std::int64_t(m.vertices.size()),
-                                  std::int64_t(m.triangles.size()), r.faces_read, r.non_triangles_ignored};
-    const std::int64_t welded = r.corners_welded;
-    bool ok = WriteAll(fds[1], head, sizeof head) && WriteAll(fds[1], &welded, sizeof welded) &&
-              WriteAll(fds[1], message.data(), message.size());
+    // Header: failed?, message size, vertices, triangles, the report; then the message or the arrays.
+    const std::int64_t head[7] = {message.empty() ? 0 : 1,        std::int64_t(message.size()),
+                                  std::int64_t(m.vertices.size()), std::int64_t(m.triangles.size()),
+                                  r.faces_read,                     r.non_triangles_ignored,
+                                  r.corners_welded};
+    bool ok = WriteAll(fds[1], head, sizeof head) && WriteAll(fds[1], message.data(), message.size());
     if (ok && message.empty())
       ok = WriteAll(fds[1], m.vertices.data(), m.vertices.size() * sizeof(Vec3)) &&
            WriteAll(fds[1], m.triangles.data(), m.triangles.size() * sizeof(std::array<int, 3>));
@@ -331,14 +327,15 @@ TriangleMesh ReadMesh(const std::string& path, MeshReadReport* report_out) {
   if (!std::filesystem::is_regular_file(path, ec))
     throw Error(path + ": no such mesh file");
   if (!std::ifstream(path, std::ios::binary).good()) throw Error(path + ": cannot open file");
-  if (std::filesystem::file_size(path, ec) == 0) throw Error(path + ": file is empty");
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (size == 0) throw Error(path + ": file is empty");
 
-  if (ext == ".ply") CheckPlyHeader(path);
-  if (ext == ".off") CheckOffHeader(path);
+  if (ext == ".ply") CheckPlyHeader(path, size);
+  if (ext == ".off") CheckOffHeader(path, size);
 
   TriangleMesh mesh;
   MeshReadReport report;
-  ImportIsolated(path, mesh, report);
+  ImportIsolated(path, size, mesh, report);
   if (mesh.triangles.empty())
     throw Error(path + ": mesh has no triangles" +
                 (report.non_triangles_ignored

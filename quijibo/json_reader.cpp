@@ -93,12 +93,12 @@ std::size_t JsonReader::array_size(const std::string& pointer) const {
   return v.size();
 }
 
-json ParseJson(const std::string& text, const std::string& source) {
+json ParseJson(const std::string& text, const std::string& source, std::size_t first_line) {
   try {
     return json::parse(text);
   } catch (const json::parse_error& e) {
     // Turn the byte offset into line:column.
-    std::size_t line = 1, col = 1;
+    std::size_t line = first_line, col = 1;
     for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
       if (text[i] == '\n') ++line, col = 1;
       else ++col;
@@ -113,7 +113,8 @@ json ParseJson(const std::string& text, const std::string& source) {
     std::string what = e.what();
     const auto p = what.find("] ");
     if (p != std::string::npos) what = what.substr(p + 2);
-    throw Error(source + ": invalid JSON: " + what);
+    throw Error(source + (first_line == 1 ? std::string() : ":" + std::to_string(first_line)) +
+                ": invalid JSON: " + what);
   }
 }
 

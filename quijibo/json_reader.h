@@ -42,8 +42,10 @@ class JsonReader {
   std::string source_;
 };
 
-// Parses text as JSON, reporting "<source>:<line>:<column>: ..." on a syntax error.
-nlohmann::json ParseJson(const std::string& text, const std::string& source);
+// Parses text as JSON, reporting "<source>:<line>:<column>: invalid JSON: ..." on a syntax error and
+// "<source>: invalid JSON: ..." on a value the parser cannot hold (1e99999). `first_line` is the
+// line number of the text's first line (for one line of a JSON-lines file).
+nlohmann::json ParseJson(const std::string& text, const std::string& source, std::size_t first_line = 1);
 
 // Edit distance, for "did you mean" suggestions.
 int EditDistance(const std::string& a, const std::string& b);
