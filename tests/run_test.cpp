@@ -4,7 +4,6 @@
 // Tiny settings throughout (analytic torus, 20^3, a few iterations) so the suite stays fast.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/mount.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -43,8 +42,10 @@ std::string TempDir(const std::string& name) {
 }
 
 // Runs the binary with `args`; stderr is collected in *err (when given). With `background`, returns at
-// once with the pid.
-int RunQ(const std::vector<std::string>& args, std::string* err = nullptr, pid_t* background = nullptr) {
+// once with the pid. `max_file_bytes` (0: none) limits every file the child writes (RLIMIT_FSIZE with
+// SIGXFSZ ignored, so an over-long write fails with EFBIG as a write to a full disk fails with ENOSPC).
+int RunQ(const std::vector<std::string>& args, std::string* err = nullptr, pid_t* background = nullptr,
+         rlim_t max_file_bytes = 0) {
   std::vector<std::string> all = {QUIJIBO_BINARY};
   all.insert(all.end(), args.begin(), args.end());
   std::vector<char*> argv;
@@ -52,14 +53,20 @@ int RunQ(const std::vector<std::string>& args, std::string* err = nullptr, pid_t
   argv.push_back(nullptr);
   const std::string err_path =
       (fs::temp_directory_path() / ("quijibo_run_stderr_" + std::to_string(::getpid()))).string();
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, err ? err_path.c_str() : "/dev/null",
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  pid_t pid;
-  posix_spawn(&pid, QUIJIBO_BINARY, &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (max_file_bytes) {
+      const rlimit limit{max_file_bytes, max_file_bytes};
+      setrlimit(RLIMIT_FSIZE, &limit);
+      signal(SIGXFSZ, SIG_IGN);
+    }
+    const int e = open(err ? err_path.c_str() : "/dev/null", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int o = open("/dev/null", O_WRONLY);
+    dup2(e, STDERR_FILENO);
+    dup2(o, STDOUT_FILENO);
+    execv(QUIJIBO_BINARY, argv.data());
+    _exit(127);
+  }
   if (background) {
     *background = pid;
     return 0;
@@ -251,38 +258,6 @@ TEST(RunTest, AJuliaSetWithoutSurfaceIsReportedNotFatal) {
   fs::remove_all(dir);
 }
 
-// Runs `quijibo run EXP --out OUT [--resume] --quiet` with files limited to `max_file_bytes` (0: no
-// limit; RLIMIT_FSIZE with SIGXFSZ ignored, so an over-long write fails with EFBIG as a write to a
-// full disk fails with ENOSPC). Returns the exit status; stderr in *err.
-int RunLimited(const std::string& exp, const std::string& out, bool resume, rlim_t max_file_bytes, std::string* err) {
-  const std::string err_path =
-      (fs::temp_directory_path() / ("quijibo_run_stderr_limited_" + std::to_string(::getpid()))).string();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    if (max_file_bytes) {
-      const rlimit limit{max_file_bytes, max_file_bytes};
-      setrlimit(RLIMIT_FSIZE, &limit);
-      signal(SIGXFSZ, SIG_IGN);
-    }
-    const int fd = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(fd, STDERR_FILENO);
-    const int null = open("/dev/null", O_WRONLY);
-    dup2(null, STDOUT_FILENO);
-    std::vector<std::string> args = {QUIJIBO_BINARY, "run", exp, "--out", out, "--quiet"};
-    if (resume) args.push_back("--resume");
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    execv(QUIJIBO_BINARY, argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  *err = Slurp(err_path);
-  fs::remove(err_path);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 // No temporary file, no truncated JSON: what a failed run leaves is whole.
 void ExpectNothingPartial(const std::string& out) {
   if (!fs::exists(out)) return;
@@ -306,13 +281,13 @@ TEST(RunTest, AFullDiskIsAClearErrorAndResumeFinishesTheRun) {
   fs::create_directories(disk);
   const bool tmpfs = ::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=96k") == 0;
   std::string err;
-  EXPECT_EQ(RunLimited(exp, out, false, tmpfs ? 0 : 24 * 1024, &err), 1) << err;
+  EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err, nullptr, tmpfs ? 0 : 24 * 1024), 1) << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   EXPECT_NE(err.find(tmpfs ? "No space left on device" : "File too large"), std::string::npos) << err;
   EXPECT_NE(err.find(disk), std::string::npos) << "the message names the file: " << err;
   ExpectNothingPartial(out);
   if (tmpfs) ::mount("tmpfs", disk.c_str(), "tmpfs", MS_REMOUNT, "size=64m");
-  EXPECT_EQ(RunLimited(exp, out, true, 0, &err), 0) << err;
+  EXPECT_EQ(RunQ({"run", exp, "--out", out, "--resume", "--quiet"}, &err), 0) << err;
   EXPECT_TRUE(fs::exists(out + "/report.md"));
   EXPECT_TRUE(fs::exists(out + "/mesh/julia.ply"));
   ExpectNothingPartial(out);
