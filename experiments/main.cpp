@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   quijibo::cli::AddModuleCommands(app);
   quijibo::cli::AddModulusCommands(app);
   quijibo::cli::AddJuliaCommands(app);
+  quijibo::cli::AddShapeCommands(app);
   quijibo::cli::AddRunCommand(app);
   try {
     app.parse(argc, argv);

@@ -15,6 +15,7 @@
 #include "mesh/triangle_mesh.h"
 #include "monopole/fit_pipeline.h"
 #include "monopole/initial_guess.h"
+#include "monopole/kernel_fit.h"
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
 #include "quijibo/image.h"
@@ -98,6 +99,29 @@ void WritePotentialSlice(const std::string& path, const ExteriorPotential& poten
   WritePng(path, img);
 }
 
+// The initial map's one-step set {L < 0} on the slice z = 0 against the target: both dark grey,
+// set only orange, target only blue; roots within two cells of the slice as discs (top blue,
+// bottom red).
+void WriteStartSlice(const std::string& path, const ScalarGrid& sdf, const RationalMap& map, int size) {
+  const Vec3 lo = sdf.frame.min_corner;
+  const double side = sdf.frame.spacing * sdf.frame.dims[0];
+  Image img(size, size);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const Vec3 p{lo[0] + side * (x + 0.5) / size, lo[1] + side * (size - y - 0.5) / size, 0.0};
+      const bool set = OneStepLogModulus(map, p) < 0, inside = sdf.sample(p) < 0;
+      img.at(x, y) = set && inside ? Rgb{70, 70, 70} : set ? Rgb{255, 140, 20} : inside ? Rgb{60, 120, 255} : Rgb{255, 255, 255};
+    }
+  const double slab = 2 * sdf.frame.spacing;
+  auto draw = [&](const Vec4& r, Rgb c) {
+    if (std::abs(r[2]) > slab) return;
+    img.disc((r[0] - lo[0]) / side * size, size - (r[1] - lo[1]) / side * size, std::max(1.5, size / 250.0), c);
+  };
+  for (const Vec4& r : map.top_roots) draw(r, {30, 80, 255});
+  for (const Vec4& r : map.bottom_roots) draw(r, {255, 40, 30});
+  WritePng(path, img);
+}
+
 }  // namespace
 
 void AddModuleCommands(CLI::App& app) {
@@ -111,17 +135,24 @@ void AddModuleCommands(CLI::App& app) {
   sdf->add_option("-r,--resolution", so->resolution, "Cells per axis")->capture_default_str()->check(CLI::Range(4, 2048));
   sdf->add_option("--padding", so->padding, "Normalization padding")->capture_default_str();
   sdf->add_option("--fractal-radius", so->fractal_radius, "Fractal frame scale")->capture_default_str();
+  sdf->add_option_function<std::string>(
+         "--target-box", [so](const std::string& b) { so->box = ParseTargetBox(b); },
+         "unit: the whole unit cube, a margin of `padding` around the shape (default); reference: the reference "
+         "code's box, the shape plus one cell")
+      ->check(CLI::IsMember({"unit", "reference"}));
   sdf->add_flag("--refuse-open", [so](std::int64_t) { so->sdf.allow_open = false; },
                 "Refuse meshes with holes instead of signing them by winding numbers");
   sdf->callback([so] { RunSdfCommand(*so); });
 
   // monopoles
   struct Args {
-    std::string mesh, out, fit_target = "reference";
+    std::string mesh, out, fit_target = "reference", initializer = "log-kernel";
     int resolution = 97, png_size = 800;
     MonopoleOptions monopole;
     InitialGuessOptions guess;
+    KernelFitOptions kernel;
     double padding = 0.125, fractal_radius = 4.0;
+    std::string target_box = "unit";
   };
   auto a = std::make_shared<Args>();
   a->monopole.target = MonopoleTarget::kOneMinusPotential;
@@ -132,6 +163,16 @@ void AddModuleCommands(CLI::App& app) {
   m->add_option("mesh", a->mesh, "Input mesh")->required();
   m->add_option("-o,--out", a->out, "Output folder")->required();
   m->add_option("-r,--resolution", a->resolution, "Target grid cells per axis")->capture_default_str()->check(CLI::Range(8, 1024));
+  m->add_option("--initializer", a->initializer,
+                "log-kernel: fit L = ln C + sum e_i log|x - p_i| to the signed distance by least squares (default; "
+                "monopole/kernel_fit.h); monopoles: the paper's potential fit with its charges as exponents")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"log-kernel", "monopoles"}));
+  m->add_option("--roots", a->kernel.roots, "log-kernel: root positions (pairs on the surface normals)")->capture_default_str();
+  m->add_option("--root-offset", a->kernel.offset_cells, "log-kernel: distance of the roots from the surface, in cells")->capture_default_str();
+  m->add_option("--band", a->kernel.band_cells, "log-kernel: half-width of the band where L follows the distance, in cells")->capture_default_str();
+  m->add_option("--band-amplitude", a->kernel.amplitude, "log-kernel: |L| at the band's edge")->capture_default_str();
+  m->add_option("--ridge", a->kernel.ridge, "log-kernel: Tikhonov weight on the exponents")->capture_default_str();
   m->add_option("--epsilon", a->monopole.fit.epsilon, "Stop at this relative residual")->capture_default_str();
   m->add_option("--fit-target", a->fit_target,
                 "reference: fit 1 - P as the reference code (top and bottom roots, the paper's results); "
@@ -150,6 +191,11 @@ void AddModuleCommands(CLI::App& app) {
   m->add_option("--scan-resolution", a->guess.scan_resolution, "Grid of the ln C scan")->capture_default_str();
   m->add_option("--padding", a->padding, "Normalization padding")->capture_default_str();
   m->add_option("--fractal-radius", a->fractal_radius, "Fractal frame scale")->capture_default_str();
+  m->add_option("--target-box", a->target_box,
+                "unit: the whole unit cube, a margin of `padding` around the shape; reference: the reference code's "
+                "box, the shape plus one cell (quijibo/frame.h)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"unit", "reference"}));
   m->add_option("--png-size", a->png_size, "Pixels per side of potential.png")->capture_default_str()->check(CLI::Range(16, 8192));
   m->callback([a] {
     a->monopole.target = a->fit_target == "reference" ? MonopoleTarget::kOneMinusPotential : MonopoleTarget::kPotential;
@@ -162,27 +208,50 @@ void AddModuleCommands(CLI::App& app) {
     SdfOptions sdf_options;
     sdf_options.name = a->mesh;
     const auto t0 = std::chrono::steady_clock::now();
-    const ScalarGrid sdf = SignedDistance(mesh, TargetGridFrame(a->resolution, frame), sdf_options);
+    const ScalarGrid sdf = SignedDistance(mesh, TargetGridFrame(a->resolution, frame, ParseTargetBox(a->target_box)), sdf_options);
     const double sdf_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    Progress progress("monopoles", 1.0, false);
-    const MonopoleResult fit = FitMonopoles(mesh.vertices, mesh.triangles, sdf, a->monopole, [&](const MonopoleProgress& p) {
-      if (p.stage == "fit")
-        progress.update(std::min(0.99, std::log(p.relative_residual) / std::log(a->monopole.fit.epsilon)),
-                        "step " + std::to_string(p.step) + ", residual " + std::to_string(p.relative_residual));
-      else
-        progress.update(0.0, p.stage + " done");
-    });
-    progress.finish();
+    const bool kernel = a->initializer == "log-kernel";
+    MonopoleResult fit;
+    RationalMap map;
     LnCScan scan;
-    const auto t1 = std::chrono::steady_clock::now();
-    RationalMap map = InitialMap(fit.monopoles, frame, sdf, a->guess, &scan);
-    const double scan_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-    map.provenance = {{"made_by", "quijibo monopoles"}, {"mesh", std::filesystem::path(a->mesh).filename().string()},
-                      {"resolution", a->resolution}, {"epsilon", a->monopole.fit.epsilon},
-                      {"fit_target", a->fit_target}, {"candidates", a->monopole.sampling.count},
-                      {"seed", a->monopole.fit.seed}, {"sampling_seed", a->monopole.sampling.seed},
-                      {"amplitude", a->guess.amplitude}, {"relative_residual", fit.fit.final_relative_residual},
-                      {"monopoles", fit.monopoles.size()}};
+    KernelFitSummary kfit;
+    double scan_seconds = 0;
+    if (kernel) {
+      a->kernel.seed = a->monopole.sampling.seed;
+      map = KernelFitMap(mesh.vertices, mesh.triangles, sdf, frame, a->kernel, &kfit);
+      map.provenance = {{"made_by", "quijibo monopoles"}, {"initializer", "log-kernel"},
+                        {"mesh", std::filesystem::path(a->mesh).filename().string()},
+                        {"resolution", a->resolution}, {"roots", a->kernel.roots},
+                        {"offset_cells", a->kernel.offset_cells}, {"band_cells", a->kernel.band_cells},
+                        {"band_amplitude", a->kernel.amplitude}, {"ridge", a->kernel.ridge},
+                        {"sampling_seed", a->monopole.sampling.seed}};
+    } else {
+      Progress progress("monopoles", 1.0, false);
+      fit = FitMonopoles(mesh.vertices, mesh.triangles, sdf, a->monopole, [&](const MonopoleProgress& p) {
+        if (p.stage == "fit")
+          progress.update(std::min(0.99, std::log(p.relative_residual) / std::log(a->monopole.fit.epsilon)),
+                          "step " + std::to_string(p.step) + ", residual " + std::to_string(p.relative_residual));
+        else
+          progress.update(0.0, p.stage + " done");
+      });
+      progress.finish();
+      const auto t1 = std::chrono::steady_clock::now();
+      map = InitialMap(fit.monopoles, frame, sdf, a->guess, &scan);
+      scan_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+      map.provenance = {{"made_by", "quijibo monopoles"}, {"initializer", "monopoles"},
+                        {"mesh", std::filesystem::path(a->mesh).filename().string()},
+                        {"resolution", a->resolution}, {"epsilon", a->monopole.fit.epsilon},
+                        {"fit_target", a->fit_target}, {"candidates", a->monopole.sampling.count},
+                        {"seed", a->monopole.fit.seed}, {"sampling_seed", a->monopole.sampling.seed},
+                        {"amplitude", a->guess.amplitude}, {"relative_residual", fit.fit.final_relative_residual},
+                        {"monopoles", fit.monopoles.size()}};
+    }
+    const StartCheck start = CheckStart(map, sdf, a->guess.alpha);
+    if (start.inverted)
+      std::fprintf(stderr,
+                   "quijibo: warning: the initial map is inverted: L is not lower inside the shape than outside "
+                   "(medians %.3g inside, %.3g outside); the optimizer may not recover\n",
+                   start.median_inside, start.median_outside);
     // Everything computed: now write.
     std::filesystem::create_directories(a->out);
     const std::string dir = a->out + "/";
@@ -192,18 +261,32 @@ void AddModuleCommands(CLI::App& app) {
     WriteMap(dir + "map.json", map);
     WriteRootsPly(dir + "roots.ply", map, true);
     const auto t2 = std::chrono::steady_clock::now();
-    WritePotentialSlice(dir + "potential.png", *fit.potential, sdf, map, a->png_size);
+    if (kernel)
+      WriteStartSlice(dir + "start.png", sdf, map, a->png_size);
+    else
+      WritePotentialSlice(dir + "potential.png", *fit.potential, sdf, map, a->png_size);
     const double png_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count();
-    const json summary = {
-        {"mesh", a->mesh}, {"triangles", mesh.triangles.size()}, {"degenerate_dropped", report.degenerate_dropped},
-        {"top_roots", map.top_count()}, {"bottom_roots", map.bottom_count()},
-        {"monopoles", fit.monopoles.size()}, {"positive", fit.positive_count()}, {"negative", fit.negative_count()},
-        {"relative_residual", fit.fit.final_relative_residual}, {"steps", fit.fit.steps},
-        {"shell_points", fit.shell_points}, {"candidates", fit.candidates},
-        {"bem_elements", fit.bem.elements}, {"ln_C", map.ln_C},
-        {"seconds", {{"sdf", sdf_seconds}, {"bem", fit.seconds.bem}, {"shell", fit.seconds.shell},
-                     {"potential", fit.seconds.potential}, {"sampling", fit.seconds.sampling},
-                     {"fit", fit.seconds.fit}, {"ln_C_scan", scan_seconds}, {"png", png_seconds}}}};
+    json summary = {
+        {"mesh", a->mesh}, {"initializer", a->initializer}, {"triangles", mesh.triangles.size()},
+        {"degenerate_dropped", report.degenerate_dropped},
+        {"top_roots", map.top_count()}, {"bottom_roots", map.bottom_count()}, {"ln_C", map.ln_C},
+        {"start", {{"median_L_inside", start.median_inside}, {"median_L_outside", start.median_outside},
+                   {"iou", start.iou}, {"saturated_fraction", start.saturated}, {"inverted", start.inverted}}}};
+    if (kernel) {
+      summary["log_kernel"] = {{"rows", kfit.rows}, {"band_rows", kfit.band_rows}, {"far_rows", kfit.far_rows},
+                               {"active_set_iterations", kfit.iterations}, {"top", kfit.top},
+                               {"bottom", kfit.bottom}, {"exponent_sum", kfit.exponent_sum},
+                               {"rms_band", kfit.rms_band}, {"sign_agreement", kfit.sign_agreement}};
+      summary["seconds"] = {{"sdf", sdf_seconds}, {"fit", kfit.seconds}, {"png", png_seconds}};
+    } else {
+      summary.update(json{{"monopoles", fit.monopoles.size()}, {"positive", fit.positive_count()},
+                          {"negative", fit.negative_count()}, {"relative_residual", fit.fit.final_relative_residual},
+                          {"steps", fit.fit.steps}, {"shell_points", fit.shell_points}, {"candidates", fit.candidates},
+                          {"bem_elements", fit.bem.elements}});
+      summary["seconds"] = {{"sdf", sdf_seconds}, {"bem", fit.seconds.bem}, {"shell", fit.seconds.shell},
+                            {"potential", fit.seconds.potential}, {"sampling", fit.seconds.sampling},
+                            {"fit", fit.seconds.fit}, {"ln_C_scan", scan_seconds}, {"png", png_seconds}};
+    }
     WriteFileAtomically(dir + "monopoles.json", summary.dump(1) + "\n");
     std::printf("%s\n", summary.dump(1).c_str());
   });

@@ -26,6 +26,7 @@
 #include "mesh/sdf_command.h"
 #include "monopole/fit_pipeline.h"
 #include "monopole/initial_guess.h"
+#include "monopole/kernel_fit.h"
 #include "optim/schedule.h"
 #include "quijibo/energy.h"
 #include "quijibo/error.h"
@@ -274,7 +275,7 @@ json ResolveExperiment(const std::string& path) {
     if (!r.has("/target")) r.fail("/target", "missing: an object with \"mesh\", \"qgrid\" or \"analytic\"");
     if (!r.at("/target").is_object())
       r.fail("/target", "expected an object, found " + JsonReader::describe(r.at("/target")));
-    r.allow_keys("/target", {"mesh", "qgrid", "analytic", "resolution", "padding", "fractal_radius"});
+    r.allow_keys("/target", {"mesh", "qgrid", "analytic", "resolution", "padding", "fractal_radius", "box"});
     int kinds = 0;
     for (const char* k : {"mesh", "qgrid", "analytic"})
       if (r.has(std::string("/target/") + k)) ++kinds, target_kind = k;
@@ -292,6 +293,9 @@ json ResolveExperiment(const std::string& path) {
     rd.Int("/target/resolution", 97, 8, 1024);
     rd.Num("/target/padding", 0.125, 0.0, 0.4999);
     rd.Num("/target/fractal_radius", 4.0, 0.0, 1e4, true);
+    if (target_kind != "mesh" && r.has("/target/box"))
+      r.fail("/target/box", "only mesh targets choose their box (analytic targets use the reference box)");
+    if (target_kind == "mesh") rd.Str("/target/box", "unit", {"unit", "reference"});
   }
 
   if (method == "quijibo") {
@@ -299,8 +303,23 @@ json ResolveExperiment(const std::string& path) {
     const std::string ip = "/initial";
     if (r.has(ip) && !r.at(ip).is_object()) r.fail(ip, "expected an object, found " + JsonReader::describe(r.at(ip)));
     const std::string kind =
-        rd.Str(ip + "/kind", target_kind == "mesh" ? "monopoles" : "random", {"monopoles", "random", "map"});
-    if (kind == "monopoles") {
+        rd.Str(ip + "/kind", target_kind == "mesh" ? "log-kernel" : "random", {"log-kernel", "monopoles", "random", "map"});
+    if (kind == "log-kernel") {
+      if (target_kind != "mesh")
+        r.fail(ip + "/kind", "\"log-kernel\" needs a mesh target (\"target\": {\"mesh\": ...}); use \"random\" or \"map\"");
+      if (r.has(ip))
+        r.allow_keys(ip, {"kind", "roots", "root_offset", "band", "band_amplitude", "ridge", "sampling_seed",
+                          "zero_roots", "png_size"});
+      const KernelFitOptions ko;
+      rd.Int(ip + "/roots", ko.roots, 8, 4000);
+      rd.Num(ip + "/root_offset", ko.offset_cells, 0.0, 50.0, true);
+      rd.Num(ip + "/band", ko.band_cells, 0.0, 50.0, true);
+      rd.Num(ip + "/band_amplitude", ko.amplitude, 0.0, 100.0, true);
+      rd.Num(ip + "/ridge", ko.ridge, 0.0, 1.0);
+      rd.Int(ip + "/sampling_seed", seed, 0, (1ll << 53));
+      rd.Bool(ip + "/zero_roots", true);
+      rd.Int(ip + "/png_size", 800, 16, 8192);
+    } else if (kind == "monopoles") {
       if (target_kind != "mesh")
         r.fail(ip + "/kind", "\"monopoles\" needs a mesh target (\"target\": {\"mesh\": ...}); use \"random\" or \"map\"");
       if (r.has(ip))
@@ -747,8 +766,27 @@ void Runner::RunQuijibo() {
   if (in["kind"] == "map") files.push_back(in["map"]);
   const std::string initial_hash =
       Stage("initial", "initial", {{"target", t}, {"initial", in}}, files, {}, [&](const std::string& dir) {
-        if (in["kind"] == "monopoles") {
+        if (in["kind"] == "log-kernel") {
           std::vector<std::string> a = {"monopoles", t["mesh"], "-o", dir,
+                                        "-r", Int(t["resolution"]),
+                                        "--padding=" + Num(t["padding"]),
+                                        "--fractal-radius=" + Num(t["fractal_radius"]),
+                                        "--target-box", t["box"],
+                                        "--initializer", "log-kernel",
+                                        "--roots", Int(in["roots"]),
+                                        "--root-offset=" + Num(in["root_offset"]),
+                                        "--band=" + Num(in["band"]),
+                                        "--band-amplitude=" + Num(in["band_amplitude"]),
+                                        "--ridge=" + Num(in["ridge"]),
+                                        "--sampling-seed", Int(in["sampling_seed"]),
+                                        "--png-size", Int(in["png_size"])};
+          if (!in["zero_roots"].get<bool>()) a.push_back("--no-zero-roots");
+          RunCommand(a, dir + "/monopoles.out");
+          return;
+        }
+        if (in["kind"] == "monopoles") {
+          std::vector<std::string> a = {"monopoles", t["mesh"], "-o", dir, "--initializer", "monopoles",
+                                        "--target-box", t["box"],
                                         "-r", Int(t["resolution"]),
                                         "--padding=" + Num(t["padding"]),
                                         "--fractal-radius=" + Num(t["fractal_radius"]),
@@ -787,6 +825,7 @@ void Runner::RunQuijibo() {
           so.resolution = t["resolution"];
           so.padding = t["padding"];
           so.fractal_radius = t["fractal_radius"];
+          so.box = ParseTargetBox(t["box"]);
           so.quiet = true;
           RunSdfCommand(so);
         }
@@ -985,7 +1024,15 @@ void Runner::WriteReport(double total_seconds) {
     if (exists(rel)) md << "![" << caption << "](" << rel << ")\n\n*" << caption << "* (`" << rel << "`)\n\n";
   };
   const json monopoles = ReadStageFile(P("initial/monopoles.json"));
-  if (monopoles.is_object()) {
+  if (monopoles.is_object() && monopoles.value("initializer", "") == "log-kernel") {
+    const json& st = monopoles["start"];
+    md << "## Initial guess (log-kernel fit)\n\n| mesh triangles | roots (top/bottom) | ln C | median L inside / outside | "
+          "one-step IoU on the target grid | inverted |\n|---|---|---|---|---|---|\n| "
+       << monopoles.value("triangles", 0) << " | " << monopoles.value("top_roots", 0) << "/"
+       << monopoles.value("bottom_roots", 0) << " | " << Fixed(monopoles.value("ln_C", 0.0), 3) << " | "
+       << Fixed(st.value("median_L_inside", 0.0), 3) << " / " << Fixed(st.value("median_L_outside", 0.0), 3) << " | "
+       << Fixed(st.value("iou", 0.0), 3) << " | " << (st.value("inverted", false) ? "**yes**" : "no") << " |\n\n";
+  } else if (monopoles.is_object()) {
     md << "## Initial guess\n\n| mesh triangles | monopoles (top/bottom) | relative residual | BEM elements | ln C |\n"
           "|---|---|---|---|---|\n| "
        << monopoles.value("triangles", 0) << " | " << monopoles.value("monopoles", 0) << " ("
@@ -998,6 +1045,8 @@ void Runner::WriteReport(double total_seconds) {
        << Fixed(map.ln_C, 3) << ".\n\n";
   }
   image("initial/potential.png", "the potential on z = 0 and the monopoles (top roots blue, bottom red)");
+  image("initial/start.png", "the initial one-step set {L < 0} on z = 0 against the target (both grey, set only orange, "
+                             "target only blue; top roots blue, bottom red)");
   if (exp_["method"] == "quijibo") {
     md << "## Optimization\n\n";
     for (const json& o : exp_["optimizer"]) {

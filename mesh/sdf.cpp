@@ -302,6 +302,24 @@ std::vector<double> WindingNumbersExact(const TriangleMesh& mesh,
   return w;
 }
 
+std::vector<double> UnsignedDistance(const TriangleMesh& mesh_in, const std::vector<Vec3>& points) {
+  TriangleMesh mesh = mesh_in;
+  RemoveDegenerateTriangles(mesh);
+  ValidateMesh(mesh, "distance");
+  const Bvh bvh(Triangles(mesh), SdfOptions{}.leaf_size);
+  std::vector<double> d(points.size());
+#pragma omp parallel
+  {
+    int hint = -1;
+#pragma omp for schedule(dynamic, 256)
+    for (std::int64_t k = 0; k < std::int64_t(points.size()); ++k) {
+      const Vec3& p = points[std::size_t(k)];
+      d[std::size_t(k)] = bvh.Distance(V3{p[0], p[1], p[2]}, hint);
+    }
+  }
+  return d;
+}
+
 ScalarGrid SignedDistance(const TriangleMesh& mesh_in, const GridFrame& grid,
                           const SdfOptions& options, SdfSummary* summary_out) {
   const auto start = std::chrono::steady_clock::now();

@@ -78,6 +78,10 @@ struct SdfSummary {
 ScalarGrid SignedDistance(const TriangleMesh& mesh, const GridFrame& grid,
                           const SdfOptions& options = {}, SdfSummary* summary = nullptr);
 
+// Unsigned distance from each point to the nearest triangle of `mesh` (same frame), through the
+// same BVH as SignedDistance. Degenerate triangles are ignored. Throws on an invalid mesh.
+std::vector<double> UnsignedDistance(const TriangleMesh& mesh, const std::vector<Vec3>& points);
+
 // Generalized winding number of `mesh` at each query point, computed exactly (O(triangles) per
 // point). For tests and for checking the hierarchical evaluation.
 std::vector<double> WindingNumbersExact(const TriangleMesh& mesh, const std::vector<Vec3>& points);

@@ -72,7 +72,7 @@ void RunSdfCommand(const SdfCommandOptions& options) {
   const FractalFrame frame =
       NormalizationFor(user_mesh, options.padding, options.fractal_radius);
   const TriangleMesh mesh = ToFractalFrame(user_mesh, frame);
-  const GridFrame grid = TargetGridFrame(options.resolution, frame);
+  const GridFrame grid = TargetGridFrame(options.resolution, frame, options.box);
   SdfOptions sdf_options = options.sdf;
   sdf_options.name = options.input;
   SdfSummary summary;

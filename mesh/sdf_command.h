@@ -15,6 +15,7 @@ struct SdfCommandOptions {
   int resolution = 97;        // n: the grid has n^3 cells (TargetGridFrame)
   double padding = 0.125;     // normalization padding, in [0, 0.5)
   double fractal_radius = 4.0;
+  TargetBox box = TargetBox::kUnitCube;  // the grid's box (quijibo/frame.h)
   bool quiet = false;         // no summary on standard output
   SdfOptions sdf;             // sign policy (sdf.name is set to the input path)
 
@@ -23,7 +24,7 @@ struct SdfCommandOptions {
 };
 
 // Reads and validates the mesh, normalizes it (NormalizationFor), builds the grid with
-// TargetGridFrame(resolution, frame), computes SignedDistance, and writes
+// TargetGridFrame(resolution, frame, box), computes SignedDistance, and writes
 //   options.output                  the field (.qgrid, fractal frame)
 //   FrameJsonPathFor(options.output)  the FractalFrame, so later stages can map back
 //   options.vdb_output              if set, the field as an OpenVDB level set

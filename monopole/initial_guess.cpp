@@ -25,10 +25,7 @@ LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, d
   const std::int64_t n = grid.frame.cell_count();
   std::vector<double> F(static_cast<std::size_t>(n));
   LnCScan out;
-  auto log_dist = [&](const Vec4& r, const Vec3& p) {
-    const double a = p[0] - r[0], b = p[1] - r[1], c = p[2] - r[2], d = r[3];
-    return 0.5 * std::log(a * a + b * b + c * c + d * d);
-  };
+  auto log_dist = [&](const Vec4& r, const Vec3& p) { return LogDistance(p, r); };
   double sum = 0;
   std::int64_t finite = 0;
   for (std::int64_t c = 0; c < n; ++c) {

@@ -47,10 +47,7 @@ std::vector<char> SingularCells(const RationalMap& map, const EnergyGrid& grid,
 double MedianLogModulus(const RationalMap& map, const EnergyGrid& grid) {
   const std::int64_t n = grid.frame.cell_count();
   std::vector<double> L(static_cast<std::size_t>(n));
-  auto term = [&](const Vec4& r, const Vec3& p) {
-    const double a = p[0] - r[0], b = p[1] - r[1], c = p[2] - r[2], d = grid.slice - r[3];
-    return 0.5 * std::log(a * a + b * b + c * c + d * d);
-  };
+  auto term = [&](const Vec4& r, const Vec3& p) { return LogDistance(p, r, grid.slice); };
 #pragma omp parallel for schedule(static)
   for (std::int64_t c = 0; c < n; ++c) {
     const Vec3 p = grid.frame.cell_center(c);

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "quijibo/error.h"
+
 namespace quijibo {
 
 std::string FractalFrame::validate() const {
@@ -14,8 +16,18 @@ std::string FractalFrame::validate() const {
   return {};
 }
 
-GridFrame TargetGridFrame(int n, const FractalFrame& frame) {
-  const double side = frame.fractal_radius * (1.0 - 2.0 * frame.padding) * (n + 2.0) / n;
+TargetBox ParseTargetBox(const std::string& name) {
+  if (name == "unit") return TargetBox::kUnitCube;
+  if (name == "reference") return TargetBox::kReference;
+  throw Error("unknown target box \"" + name + "\" (expected unit or reference)");
+}
+
+std::string TargetBoxName(TargetBox box) { return box == TargetBox::kUnitCube ? "unit" : "reference"; }
+
+GridFrame TargetGridFrame(int n, const FractalFrame& frame, TargetBox box) {
+  const double side = box == TargetBox::kUnitCube
+                          ? frame.fractal_radius
+                          : frame.fractal_radius * (1.0 - 2.0 * frame.padding) * (n + 2.0) / n;
   return GridFrame::Cube(n, {0.0, 0.0, 0.0}, side);
 }
 

@@ -37,10 +37,24 @@ struct FractalFrame {
   std::string validate() const;
 };
 
+// The box of the target grid (the region the energy sees and fits).
+enum class TargetBox {
+  // The whole normalized unit cube, +-fractal_radius / 2 about the origin: the shape with a
+  // margin of `padding` on every side (1/6 of its longest side with the default padding), so the
+  // energy sees and penalizes set growing beside the shape; the same box `quijibo mesh` and the
+  // pictures use by default. The default for mesh targets.
+  kUnitCube,
+  // The reference code's SDF box: the mesh's longest side plus one cell on each side,
+  // radius * (1 - 2 * padding) * (n + 2) / n, sampled at cell centres without its half-cell shift
+  // (n = 97, defaults: side 3.0619, cell 0.03157). Set outside it is not seen by the energy and
+  // leaks (docs/benchmarks.md, shape suite). Analytic targets keep this box.
+  kReference,
+};
+TargetBox ParseTargetBox(const std::string& name);  // "unit" or "reference"
+std::string TargetBoxName(TargetBox box);
+
 // The target grid of resolution n in the fractal frame: a cube centred at the origin (the centre
-// of the mesh's bounding box) whose side is the mesh's longest side plus one cell on each side,
-// radius * (1 - 2 * padding) * (n + 2) / n, as the reference code's SDF box, but sampled at cell
-// centres without its half-cell shift. For n = 97 and the defaults: side 3.0619, cell 0.03157.
-GridFrame TargetGridFrame(int n, const FractalFrame& frame);
+// of the mesh's bounding box).
+GridFrame TargetGridFrame(int n, const FractalFrame& frame, TargetBox box = TargetBox::kReference);
 
 }  // namespace quijibo

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -67,6 +68,22 @@ struct RationalMap {
     return {Real(r[0]), Real(r[1]), Real(r[2]), Real(r[3])};
   }
 };
+
+// log|q - r| for the sample quaternion q = [p, slice].
+inline double LogDistance(const Vec3& p, const Vec4& r, double slice = 0.0) {
+  const double a = p[0] - r[0], b = p[1] - r[1], c = p[2] - r[2], d = slice - r[3];
+  return 0.5 * std::log(a * a + b * b + c * c + d * d);
+}
+
+// L = log|R(q)| after one application of the map at q = [p, slice], by the identity of design
+// brief §3.1 (ln C + tau sum T_i log|q - t_i| - beta sum B_i log|q - b_i|); -inf on a top root,
+// +inf on a bottom root. The one-step set is {L < 0}.
+inline double OneStepLogModulus(const RationalMap& m, const Vec3& p, double slice = 0.0) {
+  double top = 0, bottom = 0;
+  for (int i = 0; i < m.top_count(); ++i) top += m.top_exponents[i] * LogDistance(p, m.top_roots[i], slice);
+  for (int i = 0; i < m.bottom_count(); ++i) bottom += m.bottom_exponents[i] * LogDistance(p, m.bottom_roots[i], slice);
+  return m.ln_C + m.tau * top - m.beta * bottom;
+}
 
 // Indices into the variable vector.
 struct VariableIndex {

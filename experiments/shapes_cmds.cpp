@@ -1,0 +1,278 @@
+// `quijibo fidelity` (how well one Julia set takes its target's shape) and `quijibo bench shapes`
+// (the shape suite: every shape through `quijibo run`, then the fidelity figures, a table and a
+// picture sheet). Definitions of the figures: mesh/fidelity.h.
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+
+#include "experiments/cli.h"
+#include "mesh/fidelity.h"
+#include "mesh/sdf_command.h"
+#include "mesh/triangle_mesh.h"
+#include "quijibo/error.h"
+#include "quijibo/io.h"
+#include "quijibo/json_reader.h"
+#include "quijibo/progress.h"
+
+extern char** environ;
+
+namespace quijibo::cli {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct FidelityArgs {
+  std::string map, target, julia_mesh, shape_mesh, out;
+  FidelityOptions o;
+};
+
+void AddFidelityOptions(CLI::App* c, FidelityOptions& o) {
+  c->add_option("--lattice", o.lattice, "Lattice nodes per axis")->capture_default_str()->check(CLI::Range(8, 512));
+  c->add_option("--extend", o.extend, "Growth of the shape box on every side, as a fraction of its side")
+      ->capture_default_str()->check(CLI::Range(0.0, 2.0));
+  c->add_option("-n,--iterations", o.julia.iterations, "Iterations of the n-step set (0: skip it)")
+      ->capture_default_str()->check(CLI::Range(0, 64));
+  c->add_option("--escape", o.julia.escape_radius, "Escape radius of the n-step iteration")->capture_default_str();
+  c->add_option("--samples", o.surface_samples, "Points per mesh for Chamfer and Hausdorff")->capture_default_str();
+}
+
+Fidelity Measure(const FidelityArgs& a) {
+  const RationalMap map = ReadMap(a.map);
+  const ScalarGrid target = ReadGrid(a.target);
+  Fidelity f = MeasureSets(map, target, a.o);
+  if (!a.julia_mesh.empty() || !a.shape_mesh.empty()) {
+    if (a.julia_mesh.empty() || a.shape_mesh.empty())
+      throw Error("fidelity: Chamfer and Hausdorff need both --julia and --shape");
+    MeasureSurfaceDistances(ReadMesh(a.julia_mesh), ReadMesh(a.shape_mesh), a.o, f);
+  }
+  return f;
+}
+
+// Runs `quijibo args...` (this executable), stdout and stderr to files; returns the exit code.
+int RunSelf(const std::vector<std::string>& args, const std::string& out, const std::string& err) {
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<std::string> s{"quijibo"};
+  s.insert(s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& x : s) argv.push_back(x.data());
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw Error("bench shapes: cannot start quijibo: " + std::string(std::strerror(rc)));
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+std::string LastLine(const std::string& path) {
+  std::string text;
+  try {
+    text = ReadFile(path);
+  } catch (const Error&) {
+    return {};
+  }
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
+  const auto nl = text.rfind('\n');
+  return nl == std::string::npos ? text : text.substr(nl + 1);
+}
+
+std::string F(double v, int digits) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*f", digits, v);
+  return b;
+}
+
+struct Shape {
+  std::string name, mesh, why;
+};
+
+}  // namespace
+
+void AddShapeCommands(CLI::App& app) {
+  auto a = std::make_shared<FidelityArgs>();
+  CLI::App* c = app.add_subcommand(
+      "fidelity", "How well a map's Julia set takes its target's shape: one-step and n-step IoU and leak on a "
+                  "lattice around the shape box, Chamfer and Hausdorff distance of a meshed set (mesh/fidelity.h)");
+  c->add_option("-m,--map", a->map, "map.json")->required();
+  c->add_option("-t,--target", a->target, "The target's .qgrid (the run's initial/target.qgrid)")->required();
+  c->add_option("--julia", a->julia_mesh, "The meshed Julia set (same frame as --shape; `quijibo mesh` writes the user frame)");
+  c->add_option("--shape", a->shape_mesh, "The target mesh");
+  c->add_option("-o,--out", a->out, "Write the JSON here (default: standard output)");
+  AddFidelityOptions(c, a->o);
+  c->callback([a] { WriteOutput(a->out, Measure(*a).ToJson().dump(1) + "\n"); });
+
+  struct BenchArgs {
+    std::string suite, out = "results/shapes", schedule = "experiments/schedules/demo.json", markdown, images,
+                     initializer = "log-kernel", json_out, target_box = "unit";
+    std::vector<std::string> meshes, only;
+    int resolution = 97, mesh_resolution = 128;
+    FidelityOptions o;
+  };
+  auto b = std::make_shared<BenchArgs>();
+  CLI::App* bench = app.get_subcommand("bench");
+  CLI::App* s = bench->add_subcommand(
+      "shapes", "The shape suite: each shape through `quijibo run` (initial guess, schedule, mesh, pictures), then "
+                "one-step and n-step IoU and leak, Chamfer and Hausdorff, roots and time; a Markdown table and a "
+                "picture sheet");
+  s->add_option("--suite", b->suite, "A suite.json (data/suite/suite.json: entries with name, mesh, why)");
+  s->add_option("meshes", b->meshes, "More meshes (named by their file)");
+  s->add_option("--only", b->only, "Only these shape names");
+  s->add_option("--schedule", b->schedule, "The optimizer schedule (notation or JSON file)")->capture_default_str();
+  s->add_option("--initializer", b->initializer, "log-kernel or monopoles")
+      ->capture_default_str()->check(CLI::IsMember({"log-kernel", "monopoles"}));
+  s->add_option("--target-box", b->target_box, "unit or reference (quijibo/frame.h)")
+      ->capture_default_str()->check(CLI::IsMember({"unit", "reference"}));
+  s->add_option("-r,--resolution", b->resolution, "Target grid")->capture_default_str()->check(CLI::Range(8, 1024));
+  s->add_option("--mesh-resolution", b->mesh_resolution, "Meshing lattice")->capture_default_str()->check(CLI::Range(8, 4096));
+  s->add_option("-o,--out", b->out, "Results folder (one run per shape)")->capture_default_str();
+  s->add_option("--markdown", b->markdown, "Also write the table and picture sheet here");
+  s->add_option("--images", b->images, "Copy each shape's render and slice here (for the picture sheet)");
+  s->add_option("--json", b->json_out, "Also write the figures as JSON here");
+  AddFidelityOptions(s, b->o);
+  s->callback([b] {
+    std::vector<Shape> shapes;
+    if (!b->suite.empty()) {
+      const json doc = ParseJson(ReadFile(b->suite), b->suite);
+      JsonReader r(doc, b->suite);
+      if (!doc.is_array()) r.fail("", "expected an array of shapes");
+      const fs::path base = fs::absolute(b->suite).parent_path();
+      for (std::size_t k = 0; k < doc.size(); ++k) {
+        const std::string p = "/" + std::to_string(k);
+        Shape sh{r.string(p + "/name"), (base / r.string(p + "/mesh")).string(), r.string_or(p + "/why", "")};
+        if (!fs::exists(sh.mesh)) {
+          std::fprintf(stderr, "quijibo: bench shapes: %s: %s is missing (scripts/fetch-shapes.sh fetches it); skipped\n",
+                       sh.name.c_str(), sh.mesh.c_str());
+          continue;
+        }
+        shapes.push_back(sh);
+      }
+    }
+    for (const std::string& m : b->meshes) shapes.push_back({fs::path(m).stem().string(), fs::absolute(m).string(), ""});
+    if (!b->only.empty())
+      std::erase_if(shapes, [&](const Shape& sh) { return std::find(b->only.begin(), b->only.end(), sh.name) == b->only.end(); });
+    if (shapes.empty()) throw Error("bench shapes: no shapes (give --suite or meshes)");
+    std::string schedule = b->schedule;
+    if (fs::exists(schedule)) schedule = fs::absolute(schedule).string();
+    fs::create_directories(b->out);
+    if (!b->images.empty()) fs::create_directories(b->images);
+    json results = json::array();
+    Progress progress("bench shapes", double(shapes.size()), false);
+    for (std::size_t k = 0; k < shapes.size(); ++k) {
+      const Shape& sh = shapes[k];
+      progress.update(double(k), sh.name);
+      const fs::path dir = fs::absolute(fs::path(b->out) / sh.name);
+      fs::create_directories(dir);
+      const json exp = {{"name", sh.name},
+                        {"target", {{"mesh", sh.mesh}, {"resolution", b->resolution}, {"box", b->target_box}}},
+                        {"initial", {{"kind", b->initializer}}},
+                        {"optimizer", {{"schedule", schedule}, {"absolute_every", 50}}},
+                        {"mesh", {{"resolution", b->mesh_resolution}, {"iterations", b->o.julia.iterations}, {"vdb", false}}},
+                        {"pictures", {{"slice_iterations", 1}}}};
+      const std::string exp_path = (dir / "experiment.json").string();
+      WriteFileAtomically(exp_path, exp.dump(1) + "\n");
+      const auto t0 = std::chrono::steady_clock::now();
+      const int code = RunSelf({"run", exp_path, "--out", (dir / "run").string(), "--quiet"}, (dir / "run.out").string(),
+                               (dir / "run.err").string());
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      json row = {{"name", sh.name}, {"mesh", sh.mesh}, {"why", sh.why}, {"seconds", seconds}, {"exit_code", code}};
+      const fs::path run = dir / "run";
+      try {
+        const TriangleMesh shape = ReadMesh(sh.mesh);
+        row["triangles"] = shape.triangles.size();
+        const ScalarGrid target = ReadGrid((run / "initial/target.qgrid").string());
+        FidelityOptions one = b->o;
+        one.julia.iterations = 0;
+        const RationalMap initial = ReadMap((run / "initial/map.json").string());
+        row["roots"] = initial.root_count();
+        row["initial"] = MeasureSets(initial, target, one).ToJson();
+        if (fs::exists(run / "optimized/map.json")) {
+          const RationalMap opt = ReadMap((run / "optimized/map.json").string());
+          Fidelity f = MeasureSets(opt, target, b->o);
+          if (fs::exists(run / "mesh/julia.ply")) MeasureSurfaceDistances(ReadMesh((run / "mesh/julia.ply").string()), shape, b->o, f);
+          row["optimized"] = f.ToJson();
+          const json summary = ParseJson(ReadFile((run / "optimized/summary.json").string()), "summary.json");
+          row["psi_start"] = summary.value("absolute_start", 0.0);
+          row["psi_end"] = summary.value("absolute_end", 0.0);
+        }
+      } catch (const Error& e) {
+        row["error"] = e.what();
+      }
+      if (code != 0) row["error"] = "quijibo run failed: " + LastLine((dir / "run.err").string());
+      if (!b->images.empty())
+        for (const char* pic : {"render.png", "slice-n1.png"}) {
+          const fs::path from = run / "pictures" / pic;
+          if (fs::exists(from))
+            fs::copy_file(from, fs::path(b->images) / (sh.name + "-" + pic), fs::copy_options::overwrite_existing);
+        }
+      results.push_back(row);
+      WriteFileAtomically((fs::path(b->out) / "shapes.json").string(), results.dump(1) + "\n");
+    }
+    progress.finish();
+
+    // The table and the picture sheet.
+    auto num = [](const json& j, const char* a, const char* k) -> std::string {
+      if (!j.contains(a) || !j[a].contains(k)) return "–";
+      return F(j[a][k].get<double>(), 3);
+    };
+    std::vector<double> ious;
+    std::string md = "| shape | triangles | roots | start IoU | ψ start → end | one-step IoU | leak | n-step IoU | n-step leak | "
+                     "Chamfer | Hausdorff | time |\n|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const json& r : results) {
+      const json opt = r.value("optimized", json::object());
+      md += "| " + r["name"].get<std::string>() + " | " + std::to_string(r.value("triangles", 0)) + " | " +
+            std::to_string(r.value("roots", 0)) + " | " + num(r, "initial", "iou").substr(0) + " | " +
+            (r.contains("psi_end") ? F(r["psi_start"], 3) + " → " + F(r["psi_end"], 3) : "–") + " | " +
+            num(opt, "one_step", "iou") + " | " + num(opt, "one_step", "leak") + " | " + num(opt, "n_step", "iou") +
+            " | " + num(opt, "n_step", "leak") + " | " + (opt.contains("chamfer") ? F(opt["chamfer"], 4) : "–") + " | " +
+            (opt.contains("hausdorff") ? F(opt["hausdorff"], 3) : "–") + " | " + F(r["seconds"], 0) + " s |";
+      if (r.contains("error")) md += " " + r["error"].get<std::string>();
+      md += "\n";
+      if (opt.contains("one_step")) ious.push_back(opt["one_step"]["iou"]);
+    }
+    if (!ious.empty()) {
+      std::sort(ious.begin(), ious.end());
+      const std::size_t m = ious.size();
+      const double median = m % 2 ? ious[m / 2] : 0.5 * (ious[m / 2 - 1] + ious[m / 2]);
+      md += "\nOne-step IoU: median " + F(median, 3) + ", lowest " + F(ious.front(), 3) + " (" + std::to_string(m) +
+            " shapes).\n";
+    }
+    if (!b->images.empty() && !b->markdown.empty()) {
+      const fs::path rel = fs::relative(fs::absolute(b->images), fs::absolute(b->markdown).parent_path());
+      md += "\n| shape | slice z = 0 (n = 1; grey both, orange set only, blue target only) | render (n = " +
+            std::to_string(b->o.julia.iterations) + ") |\n|---|---|---|\n";
+      for (const json& r : results) {
+        const std::string n = r["name"];
+        md += "| " + n + " | ![](" + (rel / (n + "-slice-n1.png")).string() + ") | ![](" +
+              (rel / (n + "-render.png")).string() + ") |\n";
+      }
+    }
+    const std::time_t now = std::time(nullptr);
+    char date[32];
+    std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
+    const std::string header = "Shape suite, " + std::string(date) + ", " + std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) +
+                               " cores; initializer " + b->initializer + ", schedule `" + b->schedule + "`, target " +
+                               std::to_string(b->resolution) + "³ (" + b->target_box + " box), mesh " +
+                               std::to_string(b->mesh_resolution) + "³ n = " + std::to_string(b->o.julia.iterations) +
+                               "; lattice " + std::to_string(b->o.lattice) + "³ over the shape box grown " +
+                               F(100 * b->o.extend, 0) + " % per side.\n\n";
+    if (!b->markdown.empty()) WriteFileAtomically(b->markdown, header + md);
+    if (!b->json_out.empty()) WriteFileAtomically(b->json_out, results.dump(1) + "\n");
+    std::fputs((header + md).c_str(), stdout);
+  });
+}
+
+}  // namespace quijibo::cli

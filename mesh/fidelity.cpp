@@ -1,0 +1,127 @@
+#include "mesh/fidelity.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "mesh/sdf.h"
+#include "quijibo/error.h"
+
+namespace quijibo {
+
+std::string FidelityOptions::validate() const {
+  if (lattice < 8 || lattice > 512) return "lattice must be in [8, 512]";
+  if (!(extend >= 0 && extend <= 2)) return "extend must be in [0, 2]";
+  if (surface_samples < 100 || surface_samples > 10000000) return "surface samples must be in [100, 1e7]";
+  if (julia.iterations > 0)
+    if (auto why = julia.validate(); !why.empty()) return why;
+  return {};
+}
+
+nlohmann::json Fidelity::ToJson() const {
+  nlohmann::json j = {{"inside_nodes", inside_nodes},
+                      {"one_step", {{"iou", one_step.iou}, {"leak", one_step.leak}, {"set_nodes", one_step.set_nodes}}}};
+  if (has_n_step) j["n_step"] = {{"iou", n_step.iou}, {"leak", n_step.leak}, {"set_nodes", n_step.set_nodes}};
+  if (chamfer >= 0) j["chamfer"] = chamfer, j["hausdorff"] = hausdorff;
+  return j;
+}
+
+Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& o) {
+  if (auto why = o.validate(); !why.empty()) throw Error("fidelity: " + why);
+  const double b = map.frame.fractal_radius * (1.0 - 2.0 * map.frame.padding) / 2;  // half side of B
+  const double half = b * (1.0 + 2.0 * o.extend);
+  const int n = o.lattice;
+  const double step = 2 * half / (n - 1);
+  const Vec3 lo = target.frame.min_corner, ext = target.frame.extent();
+  auto in_grid = [&](const Vec3& p) {
+    for (int a = 0; a < 3; ++a)
+      if (p[a] < lo[a] || p[a] > lo[a] + ext[a]) return false;
+    return true;
+  };
+  std::unique_ptr<JuliaMap<double>> julia;
+  if (o.julia.iterations > 0) julia = std::make_unique<JuliaMap<double>>(map, o.julia);
+  const std::int64_t count = std::int64_t(n) * n * n;
+  std::int64_t inside = 0, inter1 = 0, union1 = 0, set1 = 0, leak1 = 0, interN = 0, unionN = 0, setN = 0, leakN = 0;
+#pragma omp parallel for schedule(dynamic, 64) reduction(+ : inside, inter1, union1, set1, leak1, interN, unionN, setN, leakN)
+  for (std::int64_t c = 0; c < count; ++c) {
+    const int i = int(c % n), j = int((c / n) % n), k = int(c / (std::int64_t(n) * n));
+    const Vec3 p{-half + i * step, -half + j * step, -half + k * step};
+    const bool in = in_grid(p) && target.sample(p) < 0;
+    const bool outside_b = std::abs(p[0]) > b || std::abs(p[1]) > b || std::abs(p[2]) > b;
+    inside += in;
+    const double L = OneStepLogModulus(map, p);
+    const bool s1 = !std::isnan(L) && L < 0;
+    set1 += s1, inter1 += s1 && in, union1 += s1 || in, leak1 += s1 && outside_b;
+    if (julia) {
+      const double v = julia->At(p).log_modulus;
+      const bool sn = !std::isnan(v) && v < o.iso;
+      setN += sn, interN += sn && in, unionN += sn || in, leakN += sn && outside_b;
+    }
+  }
+  Fidelity f;
+  f.inside_nodes = inside;
+  auto figures = [&](std::int64_t set, std::int64_t inter, std::int64_t uni, std::int64_t leak) {
+    SetFigures s;
+    s.set_nodes = set, s.leak_nodes = leak;
+    s.iou = uni ? double(inter) / double(uni) : 0;
+    s.leak = inside ? double(leak) / double(inside) : 0;
+    return s;
+  };
+  f.one_step = figures(set1, inter1, union1, leak1);
+  if (julia) f.n_step = figures(setN, interN, unionN, leakN), f.has_n_step = true;
+  return f;
+}
+
+namespace {
+
+// Points uniformly distributed by area (seeded; portable doubles from the top 53 bits).
+std::vector<Vec3> AreaSamples(const TriangleMesh& m, int count, std::uint64_t seed) {
+  std::vector<double> cdf;
+  double total = 0;
+  for (const auto& t : m.triangles) {
+    const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
+    const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const Vec3 x{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    total += 0.5 * std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    cdf.push_back(total);
+  }
+  if (!(total > 0)) throw Error("fidelity: a mesh without area");
+  std::mt19937_64 rng(seed);
+  auto uniform = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+  std::vector<Vec3> p;
+  p.reserve(std::size_t(count));
+  for (int k = 0; k < count; ++k) {
+    const std::size_t t = std::min(std::size_t(std::lower_bound(cdf.begin(), cdf.end(), uniform() * total) - cdf.begin()),
+                                   cdf.size() - 1);
+    double r1 = uniform(), r2 = uniform();
+    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+    const auto& tri = m.triangles[t];
+    const Vec3 &a = m.vertices[tri[0]], &b = m.vertices[tri[1]], &c = m.vertices[tri[2]];
+    p.push_back({a[0] + r1 * (b[0] - a[0]) + r2 * (c[0] - a[0]), a[1] + r1 * (b[1] - a[1]) + r2 * (c[1] - a[1]),
+                 a[2] + r1 * (b[2] - a[2]) + r2 * (c[2] - a[2])});
+  }
+  return p;
+}
+
+}  // namespace
+
+void MeasureSurfaceDistances(const TriangleMesh& julia, const TriangleMesh& shape, const FidelityOptions& o,
+                             Fidelity& f) {
+  if (auto why = o.validate(); !why.empty()) throw Error("fidelity: " + why);
+  Vec3 lo = shape.vertices.at(0), hi = lo;
+  for (const Vec3& v : shape.vertices)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+  const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                    (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const std::vector<double> ab = UnsignedDistance(shape, AreaSamples(julia, o.surface_samples, o.seed));
+  const std::vector<double> ba = UnsignedDistance(julia, AreaSamples(shape, o.surface_samples, o.seed + 1));
+  auto mean = [](const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return s / double(v.size());
+  };
+  f.chamfer = 0.5 * (mean(ab) + mean(ba)) / diagonal;
+  f.hausdorff = std::max(*std::max_element(ab.begin(), ab.end()), *std::max_element(ba.begin(), ba.end())) / diagonal;
+}
+
+}  // namespace quijibo

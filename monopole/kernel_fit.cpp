@@ -1,0 +1,248 @@
+#include "monopole/kernel_fit.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <Eigen/Dense>
+
+#include "monopole/sampling.h"
+#include "quijibo/error.h"
+
+namespace quijibo {
+
+std::string KernelFitOptions::validate() const {
+  if (roots < 8 || roots > 4000) return "roots must be in [8, 4000]";
+  if (!(offset_cells > 0) || offset_cells > 50) return "offset must be in (0, 50] cells";
+  if (!(band_cells > 0) || band_cells > 50) return "band must be in (0, 50] cells";
+  if (!(amplitude > 0) || amplitude > 100) return "amplitude must be in (0, 100]";
+  if (!(ridge >= 0) || ridge > 1) return "ridge must be in [0, 1]";
+  if (max_band_rows < 1000) return "max band rows must be >= 1000";
+  if (coarse_stride < 1 || coarse_stride > 16) return "coarse stride must be in [1, 16]";
+  if (active_set_iterations < 1 || active_set_iterations > 50) return "active-set iterations must be in [1, 50]";
+  return {};
+}
+
+namespace {
+
+Vec3 Gradient(const ScalarGrid& sdf, const Vec3& p) {
+  const double h = sdf.frame.spacing;
+  Vec3 g;
+  for (int a = 0; a < 3; ++a) {
+    Vec3 lo = p, hi = p;
+    lo[a] -= h, hi[a] += h;
+    g[a] = (sdf.sample(hi) - sdf.sample(lo)) / (2 * h);
+  }
+  return g;
+}
+
+// Points spread evenly on a sphere (Fibonacci lattice).
+std::vector<Vec3> SpherePoints(const Vec3& c, double radius, int count) {
+  std::vector<Vec3> p;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int k = 0; k < count; ++k) {
+    const double z = 1.0 - 2.0 * (k + 0.5) / count, r = std::sqrt(1 - z * z), t = golden * k;
+    p.push_back({c[0] + radius * r * std::cos(t), c[1] + radius * r * std::sin(t), c[2] + radius * z});
+  }
+  return p;
+}
+
+}  // namespace
+
+RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<std::array<int, 3>>& triangles,
+                         const ScalarGrid& sdf, const FractalFrame& frame, const KernelFitOptions& o,
+                         KernelFitSummary* summary) {
+  if (auto why = o.validate(); !why.empty()) throw Error("log-kernel fit: " + why);
+  const auto t0 = std::chrono::steady_clock::now();
+  const double h = sdf.frame.spacing;
+  const double delta = o.band_cells * h, s = o.amplitude;
+
+  // Root positions: pairs along the normals of blue-noise surface samples.
+  SamplingOptions so;
+  so.count = o.roots / 2;
+  so.seed = o.seed;
+  const std::vector<Vec3> samples = PoissonDiskSample(vertices, triangles, so);
+  std::vector<Vec4> roots;
+  for (const Vec3& p : samples) {
+    Vec3 n = Gradient(sdf, p);
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 1e-12)) continue;
+    for (double& c : n) c /= len;
+    for (int side : {-1, 1}) {
+      // Shorten the offset until the root is still about as far from the surface as it was moved:
+      // past the medial axis (a thin finger, a narrow gap) it would sit nearer the other side.
+      double d = o.offset_cells * h;
+      Vec3 q;
+      for (int k = 0; k < 12; ++k) {
+        q = {p[0] + side * d * n[0], p[1] + side * d * n[1], p[2] + side * d * n[2]};
+        if (side * sdf.sample(q) > 0.6 * d) break;
+        d *= 0.75;
+      }
+      roots.push_back({q[0], q[1], q[2], 0.0});
+    }
+  }
+  if (roots.empty()) throw Error("log-kernel fit: no surface normals (is the signed distance field flat?)");
+  const int R = int(roots.size()), cols = R + 1;
+
+  // Rows: the band at full resolution, a coarse lattice beyond it, and two far spheres.
+  struct Row {
+    Vec3 x;
+    double phi, weight;
+    bool two_sided;
+  };
+  std::vector<Row> rows;
+  const auto& d = sdf.frame.dims;
+  std::vector<std::int64_t> band;
+  for (std::int64_t c = 0; c < sdf.frame.cell_count(); ++c)
+    if (std::abs(sdf.values[c]) <= 2 * delta) band.push_back(c);
+  const double band_stride = std::max(1.0, double(band.size()) / o.max_band_rows);
+  for (double f = 0; f < double(band.size()); f += band_stride) {
+    const std::int64_t c = band[std::size_t(f)];
+    const double phi = sdf.values[c];
+    rows.push_back({sdf.frame.cell_center(c), phi, band_stride / std::max(h, std::abs(phi)), std::abs(phi) < delta});
+  }
+  const int band_rows = int(rows.size());
+  const int st = o.coarse_stride;
+  const double coarse_volume = double(st) * st * st;
+  double outside_coarse_weight = 0;
+  int outside_coarse = 0;
+  for (int k = st / 2; k < d[2]; k += st)
+    for (int j = st / 2; j < d[1]; j += st)
+      for (int i = st / 2; i < d[0]; i += st) {
+        const double phi = sdf.at(i, j, k);
+        if (std::abs(phi) <= 2 * delta) continue;
+        const double w = coarse_volume / std::abs(phi);
+        rows.push_back({sdf.frame.cell_center(i, j, k), phi, w, false});
+        if (phi > 0) outside_coarse_weight += w, ++outside_coarse;
+      }
+  const Vec3 ext = sdf.frame.extent();
+  const Vec3 center{sdf.frame.min_corner[0] + ext[0] / 2, sdf.frame.min_corner[1] + ext[1] / 2,
+                    sdf.frame.min_corner[2] + ext[2] / 2};
+  const double half_diagonal = 0.5 * std::sqrt(ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]);
+  const double far_weight = outside_coarse ? outside_coarse_weight / outside_coarse : 1.0 / h;
+  int far_rows = 0;
+  for (double radius : {1.1 * half_diagonal, 3.0 * half_diagonal})
+    for (const Vec3& x : SpherePoints(center, radius, 256)) rows.push_back({x, radius, far_weight, false}), ++far_rows;
+  // Inside and outside carry equal total weight, as the energy's normalization gives them.
+  double w_in = 0, w_out = 0;
+  for (const Row& r : rows) (r.phi < 0 ? w_in : w_out) += r.weight;
+  if (!(w_in > 0)) throw Error("log-kernel fit: the target has no inside cells");
+  for (Row& r : rows)
+    if (r.phi < 0) r.weight *= w_out / w_in;
+  const int M = int(rows.size());
+
+  // The design matrix: a column of ones (ln C) and the log-distances to every root.
+  Eigen::MatrixXd A(M, cols);
+  Eigen::VectorXd g(M), w(M);
+#pragma omp parallel for schedule(static)
+  for (int r = 0; r < M; ++r) {
+    A(r, 0) = 1.0;
+    for (int i = 0; i < R; ++i) A(r, i + 1) = LogDistance(rows[r].x, roots[i], 0.0);
+    g[r] = s * std::clamp(rows[r].phi / delta, -1.0, 1.0);
+    w[r] = rows[r].weight;
+  }
+  for (int r = 0; r < M; ++r)
+    if (!A.row(r).allFinite()) w[r] = 0;  // a sample on a root: left out
+
+  std::vector<char> active(M, 1);
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(cols, cols);
+  auto add_rows = [&](const std::vector<int>& which, double sign) {
+    if (which.empty()) return;
+    Eigen::MatrixXd B(Eigen::Index(which.size()), cols);
+    for (std::size_t k = 0; k < which.size(); ++k) B.row(Eigen::Index(k)) = std::sqrt(w[which[k]]) * A.row(which[k]);
+    N.selfadjointView<Eigen::Lower>().rankUpdate(B.transpose(), sign);
+  };
+  std::vector<int> all(M);
+  for (int r = 0; r < M; ++r) all[r] = r;
+  add_rows(all, 1.0);
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(cols), L;
+  int iterations = 0;
+  for (int it = 0; it < o.active_set_iterations; ++it) {
+    ++iterations;
+    Eigen::MatrixXd Nr = N.selfadjointView<Eigen::Lower>();
+    const double mean_diag = Nr.diagonal().tail(R).mean();
+    for (int i = 1; i < cols; ++i) Nr(i, i) += o.ridge * mean_diag;
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cols);
+    for (int r = 0; r < M; ++r)
+      if (active[r]) rhs.noalias() += (w[r] * g[r]) * A.row(r).transpose();
+    e = Nr.ldlt().solve(rhs);
+    if (!e.allFinite()) throw Error("log-kernel fit: the least-squares system is singular");
+    L = A * e;
+    // One-sided rows leave while satisfied and come back when violated.
+    std::vector<int> leave, enter;
+    for (int r = 0; r < M; ++r) {
+      if (rows[r].two_sided) continue;
+      const bool satisfied = rows[r].phi > 0 ? L[r] >= s : L[r] <= -s;
+      if (satisfied && active[r]) leave.push_back(r), active[r] = 0;
+      else if (!satisfied && !active[r]) enter.push_back(r), active[r] = 1;
+    }
+    if (leave.empty() && enter.empty()) break;
+    add_rows(leave, -1.0);
+    add_rows(enter, 1.0);
+  }
+
+  RationalMap m;
+  m.frame = frame;
+  m.leading_zero_roots = o.leading_zero_roots;
+  if (o.leading_zero_roots) {
+    m.top_roots.push_back({0, 0, 0, 0});
+    m.top_exponents.push_back(1.0);
+    m.bottom_roots.push_back({0, 0, 0, 0});
+    m.bottom_exponents.push_back(1.0);
+  }
+  KernelFitSummary out;
+  for (int i = 0; i < R; ++i) {
+    const double ei = e[i + 1];
+    out.exponent_sum += ei;
+    if (ei > 0) m.top_roots.push_back(roots[i]), m.top_exponents.push_back(ei), ++out.top;
+    else if (ei < 0) m.bottom_roots.push_back(roots[i]), m.bottom_exponents.push_back(-ei), ++out.bottom;
+  }
+  m.ln_C = e[0];
+  m.tau = m.beta = 1.0;
+  double band_sq = 0, band_w = 0, agree = 0, total = 0;
+  for (int r = 0; r < M; ++r) {
+    if (!(w[r] > 0)) continue;
+    if (r < band_rows) band_sq += w[r] * (L[r] - g[r]) * (L[r] - g[r]), band_w += w[r];
+    total += w[r];
+    if ((L[r] < 0) == (rows[r].phi < 0)) agree += w[r];
+  }
+  out.rows = M, out.band_rows = band_rows, out.far_rows = far_rows, out.iterations = iterations;
+  out.rms_band = band_w > 0 ? std::sqrt(band_sq / band_w) : 0;
+  out.sign_agreement = total > 0 ? agree / total : 0;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (summary) *summary = out;
+  return m;
+}
+
+StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alpha) {
+  const std::int64_t n = sdf.frame.cell_count();
+  std::vector<double> L(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < n; ++c) {
+    L[c] = OneStepLogModulus(map, sdf.frame.cell_center(c));
+  }
+  std::vector<double> in, out;
+  std::int64_t inter = 0, uni = 0, saturated = 0;
+  for (std::int64_t c = 0; c < n; ++c) {
+    const bool inside = sdf.values[c] < 0, set = L[c] < 0;  // -inf (on a top root) counts as in the set
+    if (std::isnan(L[c])) continue;
+    (inside ? in : out).push_back(L[c]);
+    inter += inside && set;
+    uni += inside || set;
+    saturated += std::abs(alpha * L[c]) > 18;
+  }
+  auto median = [](std::vector<double>& v) {
+    if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  StartCheck check;
+  check.median_inside = median(in);
+  check.median_outside = median(out);
+  check.iou = uni ? double(inter) / double(uni) : 0;
+  check.saturated = n ? double(saturated) / double(n) : 0;
+  check.inverted = !(check.median_inside < check.median_outside);
+  return check;
+}
+
+}  // namespace quijibo

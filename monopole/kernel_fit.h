@@ -1,0 +1,76 @@
+// The initial map fitted in L's own kernel (the default initial guess; design brief §3.3).
+//
+// One application of the map has log-modulus L(x) = ln C + sum_i e_i log|x - p_i| (tau = beta = 1,
+// e_i = T_i for a top root, -B_i for a bottom root), which is *linear* in ln C and the e_i. So
+// instead of fitting the 1/r potential and reusing its charges as exponents (the paper's proxy,
+// which comes out inverted on shapes such as a scanned armadillo), we fit L itself to what the
+// energy wants: L < 0 inside, L > 0 outside, crossing zero on the surface.
+//
+//   roots      pairs on the surface's normals: for each of `roots / 2` blue-noise surface samples,
+//              one root `offset` inside and one `offset` outside, the offset shortened where the
+//              shape (or the gap beside it) is thinner, so a finger's root stays in the finger
+//   target g   s * clamp(phi / delta, -1, 1): linear across a band of half-width delta around the
+//              surface, where tanh(alpha L) keeps a gradient, and +-s beyond it
+//   loss       sum_rows w_r (L_r - g_r)^2 + ridge * |e|^2, with w_r = volume_r / max(h, |phi_r|)
+//              (the paper's W = 1/phi), inside and outside rows scaled to equal total weight (as the
+//              energy's eta normalization); beyond the band the loss is one-sided: a row whose L
+//              already has the right sign and |L| >= s drops out (active-set iterations), so the
+//              fit is not spent flattening L far from the shape
+//   far field  rows on two spheres around the box ask L >= s, so the set stays bounded
+//              (sum e_i > 0 makes |R| grow at infinity)
+// The sign of a fitted e_i makes its root a top (e > 0) or bottom (e < 0) root.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "quijibo/frame.h"
+#include "quijibo/grid.h"
+#include "quijibo/rational_map.h"
+
+namespace quijibo {
+
+struct KernelFitOptions {
+  int roots = 400;             // root positions (pairs: roots / 2 surface samples), in [8, 4000]
+  double offset_cells = 2.0;   // distance of a root from the surface, in cells of the target grid
+  double band_cells = 3.0;     // delta, the half-width of the linear band, in cells
+  double amplitude = 0.3;      // s, |L| at the band's edge (tanh(alpha s) = tanh(3) with alpha 10)
+  double ridge = 1e-4;         // Tikhonov weight relative to the mean diagonal of the normal matrix
+  int max_band_rows = 60000;   // band cells kept (evenly subsampled beyond this)
+  int coarse_stride = 3;       // beyond the band, one cell in stride^3
+  int active_set_iterations = 6;
+  bool leading_zero_roots = true;  // the reference's zero roots (exponent 1, top and bottom)
+  std::uint64_t seed = 1;      // blue-noise sampling of the surface
+  std::string validate() const;
+};
+
+struct KernelFitSummary {
+  int rows = 0, band_rows = 0, far_rows = 0;
+  int iterations = 0;          // active-set iterations done
+  int top = 0, bottom = 0;     // fitted roots by sign (without the zero roots)
+  double exponent_sum = 0;     // sum e_i: > 0 keeps the set bounded
+  double rms_band = 0;         // weighted RMS of L - g on the band rows
+  double sign_agreement = 0;   // fraction of fit rows (by weight) where sign(L) = sign(phi)
+  double seconds = 0;
+};
+
+// The initial map for the closed (or winding-number signed) surface `vertices`/`triangles`,
+// both in the fractal frame of `frame`, whose signed distance `sdf` (negative inside) is given on
+// the target grid. Throws quijibo::Error on invalid options or a field without inside cells.
+RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<std::array<int, 3>>& triangles,
+                         const ScalarGrid& sdf, const FractalFrame& frame, const KernelFitOptions& options = {},
+                         KernelFitSummary* summary = nullptr);
+
+// How a map starts on a target: the one-step log-modulus L on the cells of `sdf` (a slice
+// S = 0), compared inside (phi < 0) and outside.
+struct StartCheck {
+  double median_inside = 0, median_outside = 0;
+  double iou = 0;          // of {L < 0} and {phi < 0} on the grid
+  double saturated = 0;    // fraction of cells with |alpha L| > 18 (tanh flat to 1e-15)
+  bool inverted = false;   // L is not lower inside than outside (medians)
+};
+StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alpha = 10.0);
+
+}  // namespace quijibo

@@ -1,0 +1,100 @@
+#include "monopole/kernel_fit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "monopole/test_meshes.h"
+#include "quijibo/error.h"
+
+namespace quijibo {
+namespace {
+
+// The exact signed distance of a union of two spheres (a dumbbell without a bar), and the
+// triangles of both spheres as the surface.
+struct TwoSpheres {
+  std::vector<Vec3> vertices;
+  std::vector<std::array<int, 3>> triangles;
+  ScalarGrid sdf;
+};
+
+TwoSpheres MakeTwoSpheres(double r1, double r2) {
+  TwoSpheres t;
+  const Vec3 c1{-0.9, 0, 0}, c2{0.9, 0, 0};
+  for (auto [c, r] : {std::pair{c1, r1}, std::pair{c2, r2}}) {
+    const auto m = testing::MakeIcosphere(3, c, r);
+    const int base = int(t.vertices.size());
+    t.vertices.insert(t.vertices.end(), m.vertices.begin(), m.vertices.end());
+    for (auto f : m.triangles) t.triangles.push_back({f[0] + base, f[1] + base, f[2] + base});
+  }
+  t.sdf.frame = GridFrame::Cube(40, {0, 0, 0}, 4.0);
+  t.sdf.values.resize(std::size_t(t.sdf.frame.cell_count()));
+  for (std::int64_t c = 0; c < t.sdf.frame.cell_count(); ++c) {
+    const Vec3 p = t.sdf.frame.cell_center(c);
+    auto d = [&](const Vec3& q, double r) {
+      return std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2])) - r;
+    };
+    t.sdf.values[std::size_t(c)] = std::min(d(c1, r1), d(c2, r2));
+  }
+  return t;
+}
+
+TEST(KernelFit, StartsCloseOnTwoSpheresOfDifferentSize) {
+  // A small sphere beside a large one: a fit that only captures the bulk loses the small one.
+  const TwoSpheres t = MakeTwoSpheres(0.7, 0.3);
+  KernelFitOptions o;
+  o.roots = 120;
+  KernelFitSummary s;
+  const RationalMap m = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &s);
+  const StartCheck c = CheckStart(m, t.sdf);
+  EXPECT_FALSE(c.inverted);
+  EXPECT_LT(c.median_inside, 0);
+  EXPECT_GT(c.median_outside, 0);
+  EXPECT_GT(c.iou, 0.85);
+  EXPECT_GT(s.exponent_sum, 0);  // the set is bounded
+  // Both spheres' centres are in the one-step set, the point between them is not.
+  EXPECT_LT(OneStepLogModulus(m, {-0.9, 0, 0}), 0);
+  EXPECT_LT(OneStepLogModulus(m, {0.9, 0, 0}), 0);
+  EXPECT_GT(OneStepLogModulus(m, {0.25, 0, 0}), 0);
+  EXPECT_GT(OneStepLogModulus(m, {0, 1.8, 0}), 0);
+  // Far outside the grid, L is positive (the far-field rows).
+  EXPECT_GT(OneStepLogModulus(m, {10, 3, -7}), 0);
+  EXPECT_EQ(m.top_count() + m.bottom_count(), s.top + s.bottom + 2);  // + the zero roots
+}
+
+TEST(KernelFit, IsDeterministic) {
+  const TwoSpheres t = MakeTwoSpheres(0.6, 0.4);
+  KernelFitOptions o;
+  o.roots = 60;
+  const RationalMap a = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
+  const RationalMap b = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
+  EXPECT_EQ(a.top_exponents, b.top_exponents);
+  EXPECT_EQ(a.bottom_exponents, b.bottom_exponents);
+  EXPECT_EQ(a.ln_C, b.ln_C);
+}
+
+TEST(KernelFit, CheckStartDetectsAnInvertedMap) {
+  const TwoSpheres t = MakeTwoSpheres(0.7, 0.5);
+  KernelFitOptions o;
+  o.roots = 60;
+  RationalMap m = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
+  std::swap(m.top_roots, m.bottom_roots);
+  std::swap(m.top_exponents, m.bottom_exponents);
+  m.ln_C = -m.ln_C;
+  const StartCheck c = CheckStart(m, t.sdf);
+  EXPECT_TRUE(c.inverted);
+  EXPECT_LT(c.iou, 0.2);
+}
+
+TEST(KernelFit, RejectsBadOptions) {
+  const TwoSpheres t = MakeTwoSpheres(0.7, 0.5);
+  KernelFitOptions o;
+  o.roots = 2;
+  EXPECT_THROW(KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o), Error);
+  o = {};
+  o.band_cells = -1;
+  EXPECT_THROW(KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o), Error);
+}
+
+}  // namespace
+}  // namespace quijibo
