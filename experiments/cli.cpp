@@ -156,7 +156,7 @@ void AddEnergyCommand(CLI::App& app) {
       ->check(CLI::IsMember({"float", "double", "long-double", "float128"}));
   c->add_option("-w,--weights", a->weights, "Weight field: layer (reference code) or inverse (paper, 1/phi)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"layer", "inverse"}));
+      ->check(CLI::IsMember({"layer", "inverse", "balanced"}));
   c->add_option("-r,--resolution", a->resolution,
                 "Level resolution N (cells along the longest axis); 0 = the target's own grid")
       ->capture_default_str()

@@ -145,8 +145,9 @@ bool LocalMesher(const BatchField& field, const MeshingOptions& o, MeshingSummar
 bool RunMesh(MeshArgs& a, const RationalMap& map, bool want_band, const Mesher& mesher, MeshRun& run) {
   MeshingOptions& o = a.meshing;
   const double half = map.frame.fractal_radius / 2;
-  o.min_corner = {-half, -half, -half};
-  o.max_corner = {half, half, half};
+  const Vec3 c = map.frame.box_center();
+  o.min_corner = {c[0] - half, c[1] - half, c[2] - half};
+  o.max_corner = {c[0] + half, c[1] + half, c[2] + half};
   if (!a.box.empty()) ParseBox(a.box, o.min_corner, o.max_corner);
   o.sparse = !a.dense;
   if (auto why = o.validate(); !why.empty()) throw Error("mesh: " + why);
@@ -191,7 +192,7 @@ void AddMesh(CLI::App& app, const Mesher& mesher) {
       ->capture_default_str()
       ->check(CLI::IsMember({"user", "fractal"}));
   c->add_option("--box", a->box, "Zoom box in the fractal frame: xmin,ymin,zmin,xmax,ymax,zmax (default: the whole "
-                                 "normalized cube, +-fractal_radius/2)");
+                                 "normalized cube, its centre +-fractal_radius/2)");
   c->add_option("--tile", a->meshing.tile_cells, "Cells per tile side")->capture_default_str();
   c->add_option("--bisection-steps", a->meshing.bisection_steps, "Bisection steps per edge")->capture_default_str();
   c->add_option("--margin", a->meshing.coarse_margin_cells, "Safety margin of the sparse search, cells")
@@ -340,14 +341,16 @@ void AddPicture(CLI::App& app) {
   fc->add_option("--axis", f->axis, "Normal of the plane: x, y or z")->capture_default_str();
   fc->add_option("--at", f->at, "Coordinate of the plane (fractal frame)")->capture_default_str();
   fc->add_option("--size", f->size, "Pixels along the longer side of each panel")->capture_default_str();
-  fc->add_option("--box", f->box, "Picture box (fractal frame), default +-fractal_radius/2");
+  fc->add_option("--box", f->box, "Picture box (fractal frame), default the normalized cube, box centre +-fractal_radius/2");
   fc->add_option("--modulus-scale", f->modulus_scale, "Grey = 0.5 + 0.5 tanh((log|q_n| - iso) / scale); 0: automatic")->capture_default_str();
   f->j.add(fc);
   fc->callback([f] {
     CheckOutput(f->out, {".png"}, "the picture");
     const RationalMap map = ReadMap(f->map);
     const double h = map.frame.fractal_radius / 2;
-    const SliceView view = MakeView(f->axis, f->at, f->size, f->box, {-h, -h, -h}, {h, h, h});
+    const Vec3 c = map.frame.box_center();
+    const SliceView view =
+        MakeView(f->axis, f->at, f->size, f->box, {c[0] - h, c[1] - h, c[2] - h}, {c[0] + h, c[1] + h, c[2] + h});
     f->j.finish({(view.min_corner[0] + view.max_corner[0]) / 2, (view.min_corner[1] + view.max_corner[1]) / 2,
                  (view.min_corner[2] + view.max_corner[2]) / 2});
     WritePng(f->out, ModulusVersorSlice(map, f->j.julia, view, f->modulus_scale, f->j.iso));

@@ -12,7 +12,7 @@ namespace quijibo::cli {
 
 void AddOptimizeCommand(CLI::App& app) {
   struct Args {
-    std::string target, map_path, schedule = "25(VFRF)50(VFRF)97(VF)", out_dir, weights = "layer",
+    std::string target, map_path, schedule = "25(VFRF)50(VFRF)97(VF)", out_dir, weights = WeightFieldName(OptimizeOptions{}.weights),
                 level_weights = "sample", evaluator = "loglinear", precision = "double", backend = "lbfgspp",
                 storage = "auto";
     double memory_budget_gb = 8.0;
@@ -46,8 +46,8 @@ void AddOptimizeCommand(CLI::App& app) {
   c->add_option("--backend", a->backend, "lbfgspp (bound-constrained L-BFGS-B) or ceres (L-BFGS on x = y^2)")
       ->capture_default_str()
       ->check(CLI::IsMember({"lbfgspp", "ceres"}));
-  c->add_option("-w,--weights", a->weights, "layer or inverse")->capture_default_str()
-      ->check(CLI::IsMember({"layer", "inverse"}));
+  c->add_option("-w,--weights", a->weights, "layer (reference), inverse (paper) or balanced (quijibo/target.h)")->capture_default_str()
+      ->check(CLI::IsMember({"layer", "inverse", "balanced"}));
   c->add_option("--level-weights", a->level_weights, "sample or recompute")->capture_default_str()
       ->check(CLI::IsMember({"sample", "recompute"}));
   c->add_option("--target-resolution", a->target_resolution, "Grid of an analytic target")->capture_default_str();

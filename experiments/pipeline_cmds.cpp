@@ -140,6 +140,11 @@ void AddModuleCommands(CLI::App& app) {
          "unit: the whole unit cube, a margin of `padding` around the shape (default); reference: the reference "
          "code's box, the shape plus one cell")
       ->check(CLI::IsMember({"unit", "reference"}));
+  sdf->add_option_function<std::string>(
+         "--origin", [so](const std::string& o) { so->origin = ParseOriginPlacement(o); },
+         "center: the fractal origin at the bounding box's centre (default here); inside: at the point deepest "
+         "inside the shape (mesh/normalize.h)")
+      ->check(CLI::IsMember({"center", "inside"}));
   sdf->add_flag("--refuse-open", [so](std::int64_t) { so->sdf.allow_open = false; },
                 "Refuse meshes with holes instead of signing them by winding numbers");
   sdf->callback([so] { RunSdfCommand(*so); });
@@ -152,7 +157,7 @@ void AddModuleCommands(CLI::App& app) {
     InitialGuessOptions guess;
     KernelFitOptions kernel;
     double padding = 0.125, fractal_radius = 4.0;
-    std::string target_box = "unit";
+    std::string target_box = "unit", origin = "inside";
   };
   auto a = std::make_shared<Args>();
   a->monopole.target = MonopoleTarget::kOneMinusPotential;
@@ -196,6 +201,11 @@ void AddModuleCommands(CLI::App& app) {
                 "box, the shape plus one cell (quijibo/frame.h)")
       ->capture_default_str()
       ->check(CLI::IsMember({"unit", "reference"}));
+  m->add_option("--origin", a->origin,
+                "inside: the fractal origin at the point deepest inside the shape, where iterating the map traps "
+                "orbits (default); center: at the bounding box's centre, as the reference code (mesh/normalize.h)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"center", "inside"}));
   m->add_option("--png-size", a->png_size, "Pixels per side of potential.png")->capture_default_str()->check(CLI::Range(16, 8192));
   m->callback([a] {
     a->monopole.target = a->fit_target == "reference" ? MonopoleTarget::kOneMinusPotential : MonopoleTarget::kPotential;
@@ -203,7 +213,8 @@ void AddModuleCommands(CLI::App& app) {
     if (auto why = a->guess.validate(); !why.empty()) throw Error("monopoles: " + why);
     MeshReadReport report;
     const TriangleMesh user = ReadMesh(a->mesh, &report);
-    const FractalFrame frame = NormalizationFor(user, a->padding, a->fractal_radius);
+    FractalFrame frame = NormalizationFor(user, a->padding, a->fractal_radius);
+    if (ParseOriginPlacement(a->origin) == OriginPlacement::kInside) frame = PlaceOriginInside(user, frame, a->mesh);
     const TriangleMesh mesh = ToFractalFrame(user, frame);
     SdfOptions sdf_options;
     sdf_options.name = a->mesh;

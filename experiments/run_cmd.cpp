@@ -27,6 +27,7 @@
 #include "monopole/fit_pipeline.h"
 #include "monopole/initial_guess.h"
 #include "monopole/kernel_fit.h"
+#include "optim/optimizer.h"
 #include "optim/schedule.h"
 #include "quijibo/energy.h"
 #include "quijibo/error.h"
@@ -169,7 +170,7 @@ void ReadOptimizer(Reader& rd, const std::string& p, const fs::path& base, bool 
   if (ev == "loglinear" && pr != "double")
     r.fail(p + "/precision", "the loglinear evaluator runs in double only; use \"evaluator\": \"cached\" for \"" +
                                  pr + "\"");
-  rd.Str(p + "/weights", "layer", {"layer", "inverse"});
+  rd.Str(p + "/weights", WeightFieldName(OptimizeOptions{}.weights), {"layer", "inverse", "balanced"});
   rd.Str(p + "/level_weights", "sample", {"sample", "recompute"});
   rd.Str(p + "/storage", "auto", {"auto", "double", "float", "on-the-fly"});
   rd.Num(p + "/alpha", 10.0, 0.0, 1e6, true);
@@ -275,7 +276,7 @@ json ResolveExperiment(const std::string& path) {
     if (!r.has("/target")) r.fail("/target", "missing: an object with \"mesh\", \"qgrid\" or \"analytic\"");
     if (!r.at("/target").is_object())
       r.fail("/target", "expected an object, found " + JsonReader::describe(r.at("/target")));
-    r.allow_keys("/target", {"mesh", "qgrid", "analytic", "resolution", "padding", "fractal_radius", "box"});
+    r.allow_keys("/target", {"mesh", "qgrid", "analytic", "resolution", "padding", "fractal_radius", "box", "origin"});
     int kinds = 0;
     for (const char* k : {"mesh", "qgrid", "analytic"})
       if (r.has(std::string("/target/") + k)) ++kinds, target_kind = k;
@@ -296,6 +297,9 @@ json ResolveExperiment(const std::string& path) {
     if (target_kind != "mesh" && r.has("/target/box"))
       r.fail("/target/box", "only mesh targets choose their box (analytic targets use the reference box)");
     if (target_kind == "mesh") rd.Str("/target/box", "unit", {"unit", "reference"});
+    if ((target_kind != "mesh" || method != "quijibo") && r.has("/target/origin"))
+      r.fail("/target/origin", "only QUIJIBO mesh targets place the fractal origin");
+    if (target_kind == "mesh" && method == "quijibo") rd.Str("/target/origin", "inside", {"inside", "center"});
   }
 
   if (method == "quijibo") {
@@ -771,7 +775,7 @@ void Runner::RunQuijibo() {
                                         "-r", Int(t["resolution"]),
                                         "--padding=" + Num(t["padding"]),
                                         "--fractal-radius=" + Num(t["fractal_radius"]),
-                                        "--target-box", t["box"],
+                                        "--target-box", t["box"], "--origin", t["origin"],
                                         "--initializer", "log-kernel",
                                         "--roots", Int(in["roots"]),
                                         "--root-offset=" + Num(in["root_offset"]),
@@ -786,7 +790,7 @@ void Runner::RunQuijibo() {
         }
         if (in["kind"] == "monopoles") {
           std::vector<std::string> a = {"monopoles", t["mesh"], "-o", dir, "--initializer", "monopoles",
-                                        "--target-box", t["box"],
+                                        "--target-box", t["box"], "--origin", t["origin"],
                                         "-r", Int(t["resolution"]),
                                         "--padding=" + Num(t["padding"]),
                                         "--fractal-radius=" + Num(t["fractal_radius"]),
@@ -826,6 +830,7 @@ void Runner::RunQuijibo() {
           so.padding = t["padding"];
           so.fractal_radius = t["fractal_radius"];
           so.box = ParseTargetBox(t["box"]);
+          if (t.contains("origin")) so.origin = ParseOriginPlacement(t["origin"]);
           so.quiet = true;
           RunSdfCommand(so);
         }

@@ -32,6 +32,7 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
   const double half = b * (1.0 + 2.0 * o.extend);
   const int n = o.lattice;
   const double step = 2 * half / (n - 1);
+  const Vec3 bc = map.frame.box_center();
   const Vec3 lo = target.frame.min_corner, ext = target.frame.extent();
   auto in_grid = [&](const Vec3& p) {
     for (int a = 0; a < 3; ++a)
@@ -45,9 +46,9 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
 #pragma omp parallel for schedule(dynamic, 64) reduction(+ : inside, inter1, union1, set1, leak1, interN, unionN, setN, leakN)
   for (std::int64_t c = 0; c < count; ++c) {
     const int i = int(c % n), j = int((c / n) % n), k = int(c / (std::int64_t(n) * n));
-    const Vec3 p{-half + i * step, -half + j * step, -half + k * step};
+    const Vec3 p{bc[0] - half + i * step, bc[1] - half + j * step, bc[2] - half + k * step};
     const bool in = in_grid(p) && target.sample(p) < 0;
-    const bool outside_b = std::abs(p[0]) > b || std::abs(p[1]) > b || std::abs(p[2]) > b;
+    const bool outside_b = std::abs(p[0] - bc[0]) > b || std::abs(p[1] - bc[1]) > b || std::abs(p[2] - bc[2]) > b;
     inside += in;
     const double L = OneStepLogModulus(map, p);
     const bool s1 = !std::isnan(L) && L < 0;

@@ -2,7 +2,7 @@
 // (docs/benchmarks.md, `quijibo fidelity`, `quijibo bench shapes`).
 //
 // The lattice: `lattice`^3 nodes over the shape box B (the cube of side
-// fractal_radius * (1 - 2 padding) about the origin: the mesh's longest side) grown by `extend`
+// fractal_radius * (1 - 2 padding) about the frame's box_center(): the mesh's longest side) grown by `extend`
 // of its side on every side, so it sees set beyond the region the energy fits.
 //   inside     phi < 0, phi sampled from the target grid; outside the target grid: outside
 //   one-step   {L < 0}, L = ln C + tau sum T_i log|q - t_i| - beta sum B_i log|q - b_i| at q = [x, 0]

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mesh/sdf.h"
 #include "quijibo/error.h"
 
 namespace quijibo {
@@ -22,6 +23,28 @@ FractalFrame NormalizationFor(const TriangleMesh& mesh, double padding, double f
   frame.scale = (1.0 - 2.0 * padding) / longest;
   for (int a = 0; a < 3; ++a)
     frame.translation[a] = 0.5 - frame.scale * 0.5 * (box.min[a] + box.max[a]);
+  return frame;
+}
+
+OriginPlacement ParseOriginPlacement(const std::string& name) {
+  if (name == "center") return OriginPlacement::kCenter;
+  if (name == "inside") return OriginPlacement::kInside;
+  throw Error("unknown origin placement \"" + name + "\" (expected center or inside)");
+}
+
+std::string OriginPlacementName(OriginPlacement p) { return p == OriginPlacement::kCenter ? "center" : "inside"; }
+
+FractalFrame PlaceOriginInside(const TriangleMesh& user_mesh, FractalFrame frame, const std::string& name,
+                               int resolution) {
+  SdfOptions o;
+  o.name = name;
+  const ScalarGrid sdf =
+      SignedDistance(ToFractalFrame(user_mesh, frame), TargetGridFrame(resolution, frame, TargetBox::kUnitCube), o);
+  const auto deepest = std::min_element(sdf.values.begin(), sdf.values.end());
+  if (deepest == sdf.values.end() || !(*deepest < 0))
+    throw Error(name + ": no point of the grid is inside the shape: cannot place the fractal origin inside it");
+  const Vec3 w = sdf.frame.cell_center(std::int64_t(deepest - sdf.values.begin()));
+  for (int a = 0; a < 3; ++a) frame.origin[a] = w[a] / frame.fractal_radius + frame.origin[a];
   return frame;
 }
 

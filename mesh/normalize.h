@@ -4,6 +4,8 @@
 #include "mesh/triangle_mesh.h"
 #include "quijibo/frame.h"
 
+#include <string>
+
 namespace quijibo {
 
 // The reference code's rule (TRIANGLE_MESH::normalize): the bounding box centre goes to
@@ -15,6 +17,20 @@ namespace quijibo {
 // Throws quijibo::Error when the bounding box is a point or the options are invalid.
 FractalFrame NormalizationFor(const TriangleMesh& mesh, double padding = 0.125,
                               double fractal_radius = 4.0);
+
+// How the fractal origin is placed (quijibo/frame.h).
+enum class OriginPlacement {
+  kCenter,  // the centre of the unit cube (the mesh's bounding box): the reference code
+  kInside,  // the point deepest inside the shape, where the iteration's trap belongs
+};
+OriginPlacement ParseOriginPlacement(const std::string& name);  // "center" or "inside"
+std::string OriginPlacementName(OriginPlacement p);
+
+// `frame` with its origin moved to the point deepest inside `user_mesh`: the cell centre with the
+// most negative signed distance (the first in x-fastest order on ties) on a `resolution`^3 grid
+// over the unit cube. `name` names the mesh in errors. Throws quijibo::Error when no cell is inside.
+FractalFrame PlaceOriginInside(const TriangleMesh& user_mesh, FractalFrame frame, const std::string& name,
+                               int resolution = 48);
 
 // Maps every vertex user -> fractal frame (ToFractalFrame) or back (FromFractalFrame).
 // Orientation is kept (the maps are a positive scale and a translation).

@@ -40,6 +40,7 @@ void WriteFrameJson(const std::string& path, const FractalFrame& frame,
                       {"translation", frame.translation},
                       {"source_mesh", source_mesh},
                       {"resolution", resolution}};
+  if (!frame.default_origin()) j["origin"] = frame.origin;
   WriteFileAtomically(path, j.dump(2) + "\n");
 }
 
@@ -58,6 +59,7 @@ FractalFrame ReadFrameJson(const std::string& path) {
     frame.padding = j.at("padding").get<double>();
     frame.scale = j.at("scale").get<double>();
     frame.translation = j.at("translation").get<Vec3>();
+    if (j.contains("origin")) frame.origin = j.at("origin").get<Vec3>();
   } catch (const nlohmann::json::exception& e) {
     throw Error(path + ": " + e.what());
   }
@@ -69,8 +71,8 @@ void RunSdfCommand(const SdfCommandOptions& options) {
   if (const std::string why = options.validate(); !why.empty()) throw Error("sdf: " + why);
   MeshReadReport report;
   const TriangleMesh user_mesh = ReadMesh(options.input, &report);
-  const FractalFrame frame =
-      NormalizationFor(user_mesh, options.padding, options.fractal_radius);
+  FractalFrame frame = NormalizationFor(user_mesh, options.padding, options.fractal_radius);
+  if (options.origin == OriginPlacement::kInside) frame = PlaceOriginInside(user_mesh, frame, options.input);
   const TriangleMesh mesh = ToFractalFrame(user_mesh, frame);
   const GridFrame grid = TargetGridFrame(options.resolution, frame, options.box);
   SdfOptions sdf_options = options.sdf;

@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "mesh/normalize.h"
 #include "mesh/sdf.h"
 #include "quijibo/frame.h"
 
@@ -16,6 +17,7 @@ struct SdfCommandOptions {
   double padding = 0.125;     // normalization padding, in [0, 0.5)
   double fractal_radius = 4.0;
   TargetBox box = TargetBox::kUnitCube;  // the grid's box (quijibo/frame.h)
+  OriginPlacement origin = OriginPlacement::kCenter;  // the fractal origin (mesh/normalize.h)
   bool quiet = false;         // no summary on standard output
   SdfOptions sdf;             // sign policy (sdf.name is set to the input path)
 

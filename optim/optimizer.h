@@ -32,7 +32,9 @@ struct OptimizeOptions {
   std::string evaluator = "loglinear";  // "loglinear" (double) or "cached" (any precision)
   Precision precision = Precision::kDouble;
   std::string backend = "lbfgspp";      // "lbfgspp" (L-BFGS-B) or "ceres" (L-BFGS on x = y^2)
-  WeightField weights = WeightField::kLayer;
+  // Balanced layer weights: a misclassified cell costs the same inside and outside, as in the IoU
+  // (quijibo/target.h); kLayer is the reference code's, kInverse the paper's.
+  WeightField weights = WeightField::kBalanced;
   LevelWeights level_weights = LevelWeights::kSampleFinest;
   EnergyOptions energy;
   LogLinearOptions loglinear;

@@ -13,6 +13,8 @@ std::string FractalFrame::validate() const {
   if (!(scale > 0.0) || !std::isfinite(scale)) return "scale must be a positive finite number";
   for (double t : translation)
     if (!std::isfinite(t)) return "translation must be finite";
+  for (double o : origin)
+    if (!(o >= 0.0 && o <= 1.0)) return "origin must lie in the unit cube [0, 1]^3";
   return {};
 }
 
@@ -28,7 +30,7 @@ GridFrame TargetGridFrame(int n, const FractalFrame& frame, TargetBox box) {
   const double side = box == TargetBox::kUnitCube
                           ? frame.fractal_radius
                           : frame.fractal_radius * (1.0 - 2.0 * frame.padding) * (n + 2.0) / n;
-  return GridFrame::Cube(n, {0.0, 0.0, 0.0}, side);
+  return GridFrame::Cube(n, frame.box_center(), side);
 }
 
 }  // namespace quijibo

@@ -74,6 +74,7 @@ json MapToJson(const RationalMap& m) {
                 {"padding", m.frame.padding},
                 {"scale", m.frame.scale},
                 {"translation", m.frame.translation}};
+  if (!m.frame.default_origin()) j["frame"]["origin"] = m.frame.origin;
   j["ln_C"] = m.ln_C;
   j["tau"] = m.tau;
   j["beta"] = m.beta;
@@ -98,7 +99,7 @@ RationalMap MapFromJson(const json& j, const std::string& source) {
   if (r.integer("/version") != 1) r.fail("/version", "expected 1 (the only version so far)");
   RationalMap m;
   if (r.has("/frame")) {
-    r.allow_keys("/frame", {"fractal_radius", "padding", "scale", "translation"});
+    r.allow_keys("/frame", {"fractal_radius", "padding", "scale", "translation", "origin"});
     m.frame.fractal_radius = r.number_or("/frame/fractal_radius", m.frame.fractal_radius);
     m.frame.padding = r.number_or("/frame/padding", m.frame.padding);
     m.frame.scale = r.number_or("/frame/scale", m.frame.scale);
@@ -107,6 +108,10 @@ RationalMap MapFromJson(const json& j, const std::string& source) {
         r.fail("/frame/translation", "expected an array of 3 numbers");
       for (int a = 0; a < 3; ++a)
         m.frame.translation[a] = r.number("/frame/translation/" + std::to_string(a));
+    }
+    if (r.has("/frame/origin")) {
+      if (r.array_size("/frame/origin") != 3) r.fail("/frame/origin", "expected an array of 3 numbers");
+      for (int a = 0; a < 3; ++a) m.frame.origin[a] = r.number("/frame/origin/" + std::to_string(a));
     }
     if (auto why = m.frame.validate(); !why.empty()) r.fail("/frame", why);
   }

@@ -82,10 +82,13 @@ ScalarGrid AnalyticTarget(const std::string& spec, const GridFrame& frame) {
 WeightField ParseWeightField(const std::string& name) {
   if (name == "layer") return WeightField::kLayer;
   if (name == "inverse") return WeightField::kInverse;
-  throw Error("unknown weight field \"" + name + "\": expected layer or inverse");
+  if (name == "balanced") return WeightField::kBalanced;
+  throw Error("unknown weight field \"" + name + "\": expected layer, inverse or balanced");
 }
 
-std::string WeightFieldName(WeightField w) { return w == WeightField::kLayer ? "layer" : "inverse"; }
+std::string WeightFieldName(WeightField w) {
+  return w == WeightField::kLayer ? "layer" : w == WeightField::kInverse ? "inverse" : "balanced";
+}
 
 namespace {
 
@@ -165,7 +168,7 @@ std::vector<double> ComputeWeights(const ScalarGrid& sdf, WeightField field) {
   if (inside == std::int64_t(sdf.values.size()))
     throw Error("target has no cell outside the shape: enlarge the grid");
   std::vector<double> w;
-  if (field == WeightField::kLayer) {
+  if (field == WeightField::kLayer || field == WeightField::kBalanced) {
     w = LayerWeights(sdf);
   } else {
     const double floor = 0.5 * sdf.frame.spacing;
@@ -175,7 +178,13 @@ std::vector<double> ComputeWeights(const ScalarGrid& sdf, WeightField field) {
       w[c] = (phi < 0 ? -1.0 : 1.0) / std::max(std::abs(phi), floor);
     }
   }
-  NormalizeHalves(sdf, w);
+  if (field == WeightField::kBalanced) {
+    double total = 0;
+    for (double x : w) total += std::abs(x);
+    for (double& x : w) x /= total;
+  } else {
+    NormalizeHalves(sdf, w);
+  }
   return w;
 }
 

@@ -22,8 +22,14 @@ enum class WeightField {
   kLayer,
   // The paper: W = 1/phi, with |phi| clamped to at least half a cell so W stays finite.
   kInverse,
+  // The layer weights without the halves' normalization: W = -1/k inside, 1/k outside, scaled
+  // only so that sum |W| = 1. A wrongly classified cell then costs the same on either side, as in
+  // the IoU; the halves' normalization makes one inside cell worth (sum outside 1/k) /
+  // (sum inside 1/k) outside cells (5 to 20 for thin shapes in the unit-cube box), so its optimum
+  // grows the set over the outside (docs/benchmarks.md, shape suite).
+  kBalanced,
 };
-WeightField ParseWeightField(const std::string& name);  // "layer" or "inverse"
+WeightField ParseWeightField(const std::string& name);  // "layer", "inverse" or "balanced"
 std::string WeightFieldName(WeightField w);
 
 // k = 1 + the 6-connected grid-layer distance of each cell from the sign interface (k = 1 on
@@ -31,7 +37,7 @@ std::string WeightFieldName(WeightField w);
 std::vector<int> LayerIndex(const ScalarGrid& sdf);
 
 // W on the grid of `sdf`, normalized as the reference code does: the inside cells (phi < 0)
-// sum to -0.5 and the outside cells to +0.5, so sum |W| = 1. Throws if the field has no inside
+// sum to -0.5 and the outside cells to +0.5, so sum |W| = 1 (kBalanced: only sum |W| = 1). Throws if the field has no inside
 // or no outside cell.
 std::vector<double> ComputeWeights(const ScalarGrid& sdf, WeightField field);
 

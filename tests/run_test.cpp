@@ -148,7 +148,7 @@ TEST(RunTest, AMeshTargetGoesThroughTheMonopoleStage) {
   const std::string exp = dir + "/bunny.json", out = dir + "/results";
   const json e = {
       {"target", {{"mesh", std::string(QUIJIBO_SOURCE_DIR) + "/data/bunny.obj"}, {"resolution", 25}}},
-      {"initial", {{"candidates", 10000}, {"bem_elements", 600}, {"png_size", 64}}},
+      {"initial", {{"kind", "monopoles"}, {"candidates", 10000}, {"bem_elements", 600}, {"png_size", 64}}},
       {"optimizer", {{"schedule", "12(VF)"}, {"max_iterations", {{"V", 5}, {"F", 5}}}}},
       {"mesh", {{"enabled", false}}},
       {"pictures", {{"slice_size", 32}}},

@@ -226,7 +226,7 @@ TEST(SdfCommand, WritesFieldFrameAndVdb) {
   EXPECT_EQ(frame.scale, expected.scale);
   EXPECT_EQ(frame.translation, expected.translation);
   const ScalarGrid field = ReadGrid(o.output);
-  EXPECT_EQ(field.frame, TargetGridFrame(25, frame));
+  EXPECT_EQ(field.frame, TargetGridFrame(25, frame, TargetBox::kUnitCube));
   const ScalarGrid vdb = ReadVdb(o.vdb_output);
   EXPECT_EQ(vdb.frame.dims, field.frame.dims);
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(vdb.frame.min_corner[a], field.frame.min_corner[a], 1e-9);

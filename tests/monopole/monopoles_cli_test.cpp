@@ -27,11 +27,35 @@ std::filesystem::path FreshDir(const std::string& name) {
   return dir;
 }
 
+TEST(MonopolesCommand, TheLogKernelStartOfTheBunnyIsCloseAndNotInverted) {
+  const auto dir = FreshDir("bunny_kernel");
+  std::string out;
+  ASSERT_EQ(RunQuijibo(std::string(QUIJIBO_SOURCE_DIR) + "/data/bunny.obj -o " + dir.string() +
+                    " -r 40 --roots 160 --png-size 64",
+                &out),
+            0)
+      << out;
+  for (const char* f : {"map.json", "target.qgrid", "target.frame.json", "roots.ply", "start.png", "monopoles.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(dir / "monopoles.json"));
+  EXPECT_EQ(summary["initializer"], "log-kernel");
+  EXPECT_FALSE(summary["start"]["inverted"].get<bool>());
+  EXPECT_GT(summary["start"]["iou"].get<double>(), 0.85);
+  const RationalMap map = ReadMap((dir / "map.json").string());
+  // The origin was placed inside the shape, and the target grid is the unit cube about the box centre.
+  EXPECT_FALSE(map.frame.default_origin());
+  const ScalarGrid target = ReadGrid((dir / "target.qgrid").string());
+  EXPECT_LT(target.sample({0, 0, 0}), -2 * target.frame.spacing);
+  EXPECT_NEAR(target.frame.spacing * 40, map.frame.fractal_radius, 1e-12);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(MonopolesCommand, WritesTheInitialGuessOfTheBunny) {
   const auto dir = FreshDir("bunny");
   std::string out;
   ASSERT_EQ(RunQuijibo(std::string(QUIJIBO_SOURCE_DIR) + "/data/bunny.obj -o " + dir.string() +
-                    " -r 25 --candidates 10000 --bem-elements 600 --png-size 64 --amplitude 50",
+                    " -r 25 --initializer monopoles --target-box reference --origin center"
+                    " --candidates 10000 --bem-elements 600 --png-size 64 --amplitude 50",
                 &out),
             0)
       << out;

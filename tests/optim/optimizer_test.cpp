@@ -167,6 +167,7 @@ std::string TempDir(const std::string& name) {
 TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {
   SmallRun run;
   OptimizeOptions o;
+  o.weights = WeightField::kLayer;
   o.schedule = Schedule::Parse("10(VFRF)20(VF)");
   for (auto& l : o.schedule.levels)
     for (auto& p : l.passes) p.max_iterations = 40;
@@ -252,7 +253,7 @@ TEST(OptimizerTest, KilledAndResumedRunMatchesAnUninterruptedOne) {
             0);
   const std::vector<std::string> common = {"optimize", "-t", "torus", "--target-resolution", "24", "-m", map,
                                            "-s", "12(VF)24(VRF)", "--max-f", "60", "--max-r", "30",
-                                           "--checkpoint-every", "7"};
+                                           "--checkpoint-every", "7", "--weights", "layer"};
   auto with_out = [&](const std::string& out, bool resume) {
     auto a = common;
     a.push_back("-o");
