@@ -191,6 +191,8 @@ void AddModuleCommands(CLI::App& app) {
   m->add_option("--offset", a->monopole.shell.offset_cells, "Offset of the fitting shell, in cells")->capture_default_str();
   m->add_option("--bem-elements", a->monopole.bem.max_elements, "BEM elements (patches)")->capture_default_str();
   m->add_option("--amplitude", a->guess.amplitude, "Exponent multiplier (reference code: 3000, which saturates tanh with our fit; see docs/benchmarks.md)")->capture_default_str();
+  m->add_flag("--no-origin-root", [a](std::int64_t) { a->kernel.origin_root = false; },
+              "log-kernel: leave out the top root at the fractal origin (monopole/kernel_fit.h)");
   m->add_flag("--no-zero-roots", [a](std::int64_t) { a->guess.leading_zero_roots = false; },
               "Leave out the reference's leading zero roots");
   m->add_option("--scan-resolution", a->guess.scan_resolution, "Grid of the ln C scan")->capture_default_str();
@@ -235,6 +237,7 @@ void AddModuleCommands(CLI::App& app) {
                         {"resolution", a->resolution}, {"roots", a->kernel.roots},
                         {"offset_cells", a->kernel.offset_cells}, {"band_cells", a->kernel.band_cells},
                         {"band_amplitude", a->kernel.amplitude}, {"ridge", a->kernel.ridge},
+                        {"origin_root", a->kernel.origin_root},
                         {"sampling_seed", a->monopole.sampling.seed}};
     } else {
       Progress progress("monopoles", 1.0, false);

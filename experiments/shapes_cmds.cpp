@@ -120,6 +120,7 @@ void AddShapeCommands(CLI::App& app) {
                      initializer = "log-kernel", json_out, target_box = "unit";
     std::vector<std::string> meshes, only;
     int resolution = 97, mesh_resolution = 128;
+    bool initial_only = false, report_only = false;
     FidelityOptions o;
   };
   auto b = std::make_shared<BenchArgs>();
@@ -142,6 +143,10 @@ void AddShapeCommands(CLI::App& app) {
   s->add_option("--markdown", b->markdown, "Also write the table and picture sheet here");
   s->add_option("--images", b->images, "Copy each shape's render and slice here (for the picture sheet)");
   s->add_option("--json", b->json_out, "Also write the figures as JSON here");
+  s->add_flag("--report-only", b->report_only, "Run nothing: write the table again from <out>/shapes.json");
+  s->add_flag("--initial-only", b->initial_only,
+              "Only the initial guess (`quijibo monopoles` with --initializer): its one-step IoU and leak, whether it "
+              "is inverted, and its time; to compare initializers");
   AddFidelityOptions(s, b->o);
   s->callback([b] {
     std::vector<Shape> shapes;
@@ -164,12 +169,17 @@ void AddShapeCommands(CLI::App& app) {
     for (const std::string& m : b->meshes) shapes.push_back({fs::path(m).stem().string(), fs::absolute(m).string(), ""});
     if (!b->only.empty())
       std::erase_if(shapes, [&](const Shape& sh) { return std::find(b->only.begin(), b->only.end(), sh.name) == b->only.end(); });
-    if (shapes.empty()) throw Error("bench shapes: no shapes (give --suite or meshes)");
+    if (shapes.empty() && !b->report_only) throw Error("bench shapes: no shapes (give --suite or meshes)");
     std::string schedule = b->schedule;
     if (fs::exists(schedule)) schedule = fs::absolute(schedule).string();
     fs::create_directories(b->out);
     if (!b->images.empty()) fs::create_directories(b->images);
     json results = json::array();
+    if (b->report_only) {
+      const std::string saved = (fs::path(b->out) / "shapes.json").string();
+      results = ParseJson(ReadFile(saved), saved);
+      shapes.clear();
+    }
     Progress progress("bench shapes", double(shapes.size()), false);
     for (std::size_t k = 0; k < shapes.size(); ++k) {
       const Shape& sh = shapes[k];
@@ -182,6 +192,28 @@ void AddShapeCommands(CLI::App& app) {
                         {"optimizer", {{"schedule", schedule}, {"absolute_every", 50}}},
                         {"mesh", {{"resolution", b->mesh_resolution}, {"iterations", b->o.julia.iterations}, {"vdb", false}}},
                         {"pictures", {{"slice_iterations", 1}}}};
+      if (b->initial_only) {
+        const fs::path init = dir / ("initial-" + b->initializer);
+        const auto t0 = std::chrono::steady_clock::now();
+        const int code = RunSelf({"monopoles", sh.mesh, "-o", init.string(), "-r", std::to_string(b->resolution),
+                                  "--initializer", b->initializer, "--target-box", b->target_box},
+                                 (dir / "initial.out").string(), (dir / "initial.err").string());
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        json row = {{"name", sh.name}, {"mesh", sh.mesh}, {"seconds", seconds}, {"exit_code", code}};
+        try {
+          if (code != 0) throw Error("quijibo monopoles failed: " + LastLine((dir / "initial.err").string()));
+          const RationalMap initial = ReadMap((init / "map.json").string());
+          FidelityOptions one = b->o;
+          one.julia.iterations = 0;
+          row["roots"] = initial.root_count();
+          row["initial"] = MeasureSets(initial, ReadGrid((init / "target.qgrid").string()), one).ToJson();
+          row["start"] = ParseJson(ReadFile((init / "monopoles.json").string()), "monopoles.json")["start"];
+        } catch (const Error& e) {
+          row["error"] = e.what();
+        }
+        results.push_back(row);
+        continue;
+      }
       const std::string exp_path = (dir / "experiment.json").string();
       WriteFileAtomically(exp_path, exp.dump(1) + "\n");
       const auto t0 = std::chrono::steady_clock::now();
@@ -225,16 +257,42 @@ void AddShapeCommands(CLI::App& app) {
 
     // The table and the picture sheet.
     auto num = [](const json& j, const char* a, const char* k) -> std::string {
+      if (!j.is_object()) return "–";
       if (!j.contains(a) || !j[a].contains(k)) return "–";
       return F(j[a][k].get<double>(), 3);
     };
     std::vector<double> ious;
+    if (b->initial_only) {
+      std::string md = "| shape | roots | start one-step IoU | leak | median L inside / outside | inverted | time |\n"
+                       "|---|---:|---:|---:|---|---|---:|\n";
+      for (const json& r : results) {
+        md += "| " + r["name"].get<std::string>() + " | " + std::to_string(r.value("roots", 0)) + " | " +
+              num(r.value("initial", json::object()), "one_step", "iou") + " | " +
+              num(r.value("initial", json::object()), "one_step", "leak") + " | ";
+        if (r.contains("start"))
+          md += F(r["start"]["median_L_inside"], 3) + " / " + F(r["start"]["median_L_outside"], 3) + " | " +
+                (r["start"]["inverted"].get<bool>() ? "**yes**" : "no");
+        else
+          md += "– | –";
+        md += " | " + F(r["seconds"], 1) + " s |" + (r.contains("error") ? " " + r["error"].get<std::string>() : "") + "\n";
+        if (r.contains("initial")) ious.push_back(r["initial"]["one_step"]["iou"]);
+      }
+      std::sort(ious.begin(), ious.end());
+      if (!ious.empty()) md += "\nStart one-step IoU: median " + F(ious[ious.size() / 2], 3) + ", lowest " + F(ious.front(), 3) + ".\n";
+      const std::string header = "Initial guesses on the shape suite: initializer " + b->initializer + ", target " +
+                                 std::to_string(b->resolution) + "³ (" + b->target_box + " box); lattice " +
+                                 std::to_string(b->o.lattice) + "³.\n\n";
+      if (!b->markdown.empty()) WriteFileAtomically(b->markdown, header + md);
+      if (!b->json_out.empty()) WriteFileAtomically(b->json_out, results.dump(1) + "\n");
+      std::fputs((header + md).c_str(), stdout);
+      return;
+    }
     std::string md = "| shape | triangles | roots | start IoU | ψ start → end | one-step IoU | leak | n-step IoU | n-step leak | "
                      "Chamfer | Hausdorff | time |\n|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const json& r : results) {
       const json opt = r.value("optimized", json::object());
       md += "| " + r["name"].get<std::string>() + " | " + std::to_string(r.value("triangles", 0)) + " | " +
-            std::to_string(r.value("roots", 0)) + " | " + num(r, "initial", "iou").substr(0) + " | " +
+            std::to_string(r.value("roots", 0)) + " | " + num(r.value("initial", json::object()), "one_step", "iou") + " | " +
             (r.contains("psi_end") ? F(r["psi_start"], 3) + " → " + F(r["psi_end"], 3) : "–") + " | " +
             num(opt, "one_step", "iou") + " | " + num(opt, "one_step", "leak") + " | " + num(opt, "n_step", "iou") +
             " | " + num(opt, "n_step", "leak") + " | " + (opt.contains("chamfer") ? F(opt["chamfer"], 4) : "–") + " | " +

@@ -133,16 +133,17 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
 
   // The design matrix: a column of ones (ln C) and the log-distances to every root.
   Eigen::MatrixXd A(M, cols);
-  Eigen::VectorXd g(M), w(M);
+  Eigen::VectorXd g(M), w(M), fixed(M);
 #pragma omp parallel for schedule(static)
   for (int r = 0; r < M; ++r) {
     A(r, 0) = 1.0;
     for (int i = 0; i < R; ++i) A(r, i + 1) = LogDistance(rows[r].x, roots[i], 0.0);
     g[r] = s * std::clamp(rows[r].phi / delta, -1.0, 1.0);
+    fixed[r] = o.origin_root ? LogDistance(rows[r].x, Vec4{0, 0, 0, 0}) : 0.0;
     w[r] = rows[r].weight;
   }
   for (int r = 0; r < M; ++r)
-    if (!A.row(r).allFinite()) w[r] = 0;  // a sample on a root: left out
+    if (!A.row(r).allFinite() || !std::isfinite(fixed[r])) w[r] = 0, A.row(r).setZero(), fixed[r] = 0;  // on a root
 
   std::vector<char> active(M, 1);
   Eigen::MatrixXd N = Eigen::MatrixXd::Zero(cols, cols);
@@ -164,10 +165,10 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
     for (int i = 1; i < cols; ++i) Nr(i, i) += o.ridge * mean_diag;
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cols);
     for (int r = 0; r < M; ++r)
-      if (active[r]) rhs.noalias() += (w[r] * g[r]) * A.row(r).transpose();
+      if (active[r]) rhs.noalias() += (w[r] * (g[r] - fixed[r])) * A.row(r).transpose();
     e = Nr.ldlt().solve(rhs);
     if (!e.allFinite()) throw Error("log-kernel fit: the least-squares system is singular");
-    L = A * e;
+    L = A * e + fixed;
     // One-sided rows leave while satisfied and come back when violated.
     std::vector<int> leave, enter;
     for (int r = 0; r < M; ++r) {
@@ -183,12 +184,9 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
 
   RationalMap m;
   m.frame = frame;
-  m.leading_zero_roots = o.leading_zero_roots;
-  if (o.leading_zero_roots) {
+  if (o.origin_root) {
     m.top_roots.push_back({0, 0, 0, 0});
     m.top_exponents.push_back(1.0);
-    m.bottom_roots.push_back({0, 0, 0, 0});
-    m.bottom_exponents.push_back(1.0);
   }
   KernelFitSummary out;
   for (int i = 0; i < R; ++i) {

@@ -18,6 +18,8 @@
 //              fit is not spent flattening L far from the shape
 //   far field  rows on two spheres around the box ask L >= s, so the set stays bounded
 //              (sum e_i > 0 makes |R| grow at infinity)
+//   origin     optionally a fixed top root at the fractal origin (see origin_root), its term
+//              taken out of the target before the fit
 // The sign of a fitted e_i makes its root a top (e > 0) or bottom (e < 0) root.
 #pragma once
 
@@ -41,7 +43,12 @@ struct KernelFitOptions {
   int max_band_rows = 60000;   // band cells kept (evenly subsampled beyond this)
   int coarse_stride = 3;       // beyond the band, one cell in stride^3
   int active_set_iterations = 6;
-  bool leading_zero_roots = true;  // the reference's zero roots (exponent 1, top and bottom)
+  // A top root of exponent 1 at the fractal origin (placed deep inside the shape), first in the
+  // product: it makes the origin a zero of R, so the orbits the map traps there converge. The
+  // reference's pair of zero roots (exponent 1 top and bottom) is neutral only while tau = beta;
+  // once the optimizer scales them apart the origin can become a pole and the n-step set turns
+  // to dust (measured on the hand: n-step IoU 0.02).
+  bool origin_root = true;
   std::uint64_t seed = 1;      // blue-noise sampling of the surface
   std::string validate() const;
 };

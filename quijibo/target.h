@@ -25,7 +25,7 @@ enum class WeightField {
   // The layer weights without the halves' normalization: W = -1/k inside, 1/k outside, scaled
   // only so that sum |W| = 1. A wrongly classified cell then costs the same on either side, as in
   // the IoU; the halves' normalization makes one inside cell worth (sum outside 1/k) /
-  // (sum inside 1/k) outside cells (5 to 20 for thin shapes in the unit-cube box), so its optimum
+  // (sum inside 1/k) outside cells (3 for the bunny, 5 to 7 for thin shapes in the unit-cube box), so its optimum
   // grows the set over the outside (docs/benchmarks.md, shape suite).
   kBalanced,
 };

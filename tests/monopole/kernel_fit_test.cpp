@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "monopole/test_meshes.h"
 #include "quijibo/error.h"
@@ -44,6 +45,7 @@ TEST(KernelFit, StartsCloseOnTwoSpheresOfDifferentSize) {
   const TwoSpheres t = MakeTwoSpheres(0.7, 0.3);
   KernelFitOptions o;
   o.roots = 120;
+  o.origin_root = false;  // the origin lies between the spheres, outside the shape
   KernelFitSummary s;
   const RationalMap m = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &s);
   const StartCheck c = CheckStart(m, t.sdf);
@@ -59,7 +61,22 @@ TEST(KernelFit, StartsCloseOnTwoSpheresOfDifferentSize) {
   EXPECT_GT(OneStepLogModulus(m, {0, 1.8, 0}), 0);
   // Far outside the grid, L is positive (the far-field rows).
   EXPECT_GT(OneStepLogModulus(m, {10, 3, -7}), 0);
-  EXPECT_EQ(m.top_count() + m.bottom_count(), s.top + s.bottom + 2);  // + the zero roots
+  EXPECT_EQ(m.top_count() + m.bottom_count(), s.top + s.bottom);
+}
+
+TEST(KernelFit, TheOriginRootMakesTheOriginAZeroAndTheFitAccountsForIt) {
+  // Spheres centred on the origin's two sides of a wide ellipsoid-like union: the origin inside.
+  TwoSpheres t = MakeTwoSpheres(1.0, 1.0);
+  KernelFitOptions o;
+  o.roots = 120;
+  const RationalMap m = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
+  ASSERT_GE(m.top_count(), 1);
+  EXPECT_EQ(m.top_roots[0], (Vec4{0, 0, 0, 0}));
+  EXPECT_EQ(m.top_exponents[0], 1.0);
+  EXPECT_EQ(OneStepLogModulus(m, {0, 0, 0}), -std::numeric_limits<double>::infinity());
+  const StartCheck c = CheckStart(m, t.sdf);
+  EXPECT_GT(c.iou, 0.85);
+  EXPECT_GT(OneStepLogModulus(m, {0, 1.6, 0}), 0);
 }
 
 TEST(KernelFit, IsDeterministic) {

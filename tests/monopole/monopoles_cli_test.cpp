@@ -44,6 +44,7 @@ TEST(MonopolesCommand, TheLogKernelStartOfTheBunnyIsCloseAndNotInverted) {
   const RationalMap map = ReadMap((dir / "map.json").string());
   // The origin was placed inside the shape, and the target grid is the unit cube about the box centre.
   EXPECT_FALSE(map.frame.default_origin());
+  EXPECT_EQ(map.top_roots.at(0), (Vec4{0, 0, 0, 0}));  // the origin root
   const ScalarGrid target = ReadGrid((dir / "target.qgrid").string());
   EXPECT_LT(target.sample({0, 0, 0}), -2 * target.frame.spacing);
   EXPECT_NEAR(target.frame.spacing * 40, map.frame.fractal_radius, 1e-12);
