@@ -202,6 +202,36 @@ TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {
   std::filesystem::remove_all(o.out_dir);
 }
 
+// The result is the map of the lowest absolute energy (start or any pass end), not the last map,
+// and the summary names its pass. The last pass here, on a coarser level, fits that level's grid
+// and ends above the pass before on the finest one, as an R pass does with its reweighted field.
+TEST(OptimizerTest, TheResultIsTheBestMapOverAllPasses) {
+  SmallRun run;
+  OptimizeOptions o;
+  o.schedule = Schedule::Parse("20(VF)8(V)");
+  for (auto& l : o.schedule.levels)
+    for (auto& p : l.passes) p.max_iterations = 40;
+  o.out_dir = TempDir("best");
+  const OptimizeSummary s = Optimize(run.sdf, run.map, o);
+  ASSERT_TRUE(s.complete);
+  double best = s.absolute_start;
+  int best_pass = -1;
+  for (std::size_t k = 0; k < s.passes.size(); ++k)
+    if (s.passes[k].absolute_end < best) best = s.passes[k].absolute_end, best_pass = int(k);
+  // The case this test is about: the last pass is not the best.
+  EXPECT_GT(s.passes.back().absolute_end, best) << "the last pass ended lowest: the test proves less";
+  EXPECT_EQ(s.best_pass, best_pass);
+  EXPECT_EQ(s.absolute_end, best);
+  const double map_energy = LogLinearEnergy(run.map, MakeEnergyGrid(run.sdf, WeightField::kLayer))
+                                .Evaluate(run.map.variables(), EnergyMode::kFull, false)
+                                .energy;
+  EXPECT_NEAR(map_energy, best, 1e-12);
+  const auto summary = nlohmann::json::parse(std::ifstream(o.out_dir + "/summary.json"));
+  EXPECT_EQ(summary["best_pass"], best_pass);
+  EXPECT_EQ(summary["absolute_end"].get<double>(), best);
+  std::filesystem::remove_all(o.out_dir);
+}
+
 TEST(OptimizerTest, RunsEndToEndInLongDoubleWithTheCachedEvaluator) {
   SmallRun run;
   OptimizeOptions o;
