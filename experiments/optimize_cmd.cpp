@@ -105,7 +105,8 @@ void AddOptimizeCommand(CLI::App& app) {
     const OptimizeSummary s = Optimize(sdf, map, o);
     map.provenance["optimized"] = {{"schedule", o.schedule.notation()}, {"evaluator", o.evaluator},
                                    {"precision", a->precision}, {"backend", o.backend},
-                                   {"absolute_energy", s.absolute_end}, {"complete", s.complete}};
+                                   {"absolute_energy", s.absolute_end}, {"best_pass", s.best_pass},
+                                   {"complete", s.complete}};
     if (!s.complete) {
       std::fprintf(stderr, "%s", s.Report().c_str());
       throw Error("interrupted; checkpoint written to " + a->out_dir +

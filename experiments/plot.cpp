@@ -221,6 +221,7 @@ void Plot(const PlotOptions& o) {
     min_step = std::min(min_step, s), max_step = std::max(max_step, s);
   };
   std::string first_label;
+  bool any_relative = false;
   for (std::size_t i = 0; i < logs.size(); ++i) {
     const ConvergenceLog& log = logs[i];
     const std::string label = i < o.labels.size() ? o.labels[i] : DefaultLabel(log);
@@ -246,7 +247,9 @@ void Plot(const PlotOptions& o) {
     if (dropped)
       std::fprintf(stderr, "quijibo: warning: %s: %zu energies at psi <= -1 left out of the log axis\n",
                    log.path.c_str(), dropped);
-    if (!has_rel && !has_abs) throw Error(log.path + ": no energies to plot (no \"iteration\" or \"absolute\" lines)");
+    if (!has_rel && !has_abs)
+      throw Error(log.path + ": no energies to plot (no \"iteration\", \"absolute\" or pass-end lines)");
+    any_relative |= has_rel;
     const std::string color = kColors[i % std::size(kColors)];
     const std::string abs_color = logs.size() == 1 ? kColors[1] : color;
     if (has_rel) {
@@ -285,6 +288,11 @@ void Plot(const PlotOptions& o) {
     extra_clauses.push_back("NaN with lines dt 2 lw 1 lc rgb '#808080' title " +
                             Quote(logs.size() == 1 ? "pass start" : "pass start (" + first_label + ")"));
   }
+
+  // Passes that made no iteration leave only the absolute energies at the start and the pass ends.
+  if (!any_relative)
+    marks << "set label 'no iterations: the absolute energy at the start and at pass ends only' at graph 0.5, "
+             "graph 0.5 center font ',11' tc rgb '#404040' front\n";
 
   std::string title = o.title;
   if (title.empty()) {
@@ -352,6 +360,12 @@ void Plot(const PlotOptions& o) {
 
 }  // namespace
 
+bool HasEnergies(const ConvergenceLog& log) {
+  for (const auto& segment : log.relative)
+    if (!segment.empty()) return true;
+  return !log.absolute.empty();
+}
+
 ConvergenceLog ReadConvergenceLog(const std::string& path) {
   ConvergenceLog log;
   log.path = path;
@@ -387,6 +401,9 @@ ConvergenceLog ReadConvergenceLog(const std::string& path) {
     const std::string type = r.string("/type");
     if (type == "run") {
       log.run = j;
+      // The start map's absolute energy: the first point of the absolute curve.
+      if (r.has("/absolute_energy") && r.has("/step"))
+        if (const auto psi = Energy(r, "/absolute_energy")) pass_end_absolute.push_back({r.integer("/step"), *psi});
     } else if (type == "pass_start") {
       const long long step = r.integer("/step");
       log.passes.push_back({step, PassLabel(r)});
@@ -411,8 +428,12 @@ ConvergenceLog ReadConvergenceLog(const std::string& path) {
       if (const auto psi = Energy(r, "/energy")) log.absolute.push_back({step, *psi});
     } else if (type == "pass_end") {
       const long long step = r.integer("/step");
-      if (r.has("/absolute_energy"))
-        if (const auto psi = Energy(r, "/absolute_energy")) pass_end_absolute.push_back({step, *psi});
+      // The optimizer writes "absolute_end"; "absolute_energy" is the older name.
+      for (const char* key : {"/absolute_end", "/absolute_energy"})
+        if (r.has(key)) {
+          if (const auto psi = Energy(r, key)) pass_end_absolute.push_back({step, *psi});
+          break;
+        }
       open_segment = false;
     }
     // Other line types are for other readers.

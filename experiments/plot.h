@@ -29,12 +29,16 @@ struct ConvergenceLog {
   // Relative energies of "iteration" lines, one segment per pass (a pass starts at a
   // "pass_start" line or where level/pass of the iteration lines change).
   std::vector<std::vector<Point>> relative;
-  // Absolute energies: "absolute" lines, plus "absolute_energy" of "pass_end" lines at steps
-  // no "absolute" line covers; sorted by step.
+  // Absolute energies: "absolute" lines, plus the "absolute_end" of "pass_end" lines and the
+  // "absolute_energy" of the "run" line (the start) at steps no "absolute" line covers; sorted by
+  // step. A run whose passes made no iteration has only these.
   std::vector<Point> absolute;
   std::vector<PassMark> passes;
   bool truncated = false;  // the unparsable last line was skipped
 };
+
+// Whether a log has anything to draw.
+bool HasEnergies(const ConvergenceLog& log);
 
 // Reads a log.jsonl. Unknown line types and keys are ignored; an energy of null (NaN) is
 // skipped. An unparsable last line (a killed run) is skipped with a warning on stderr; any other

@@ -874,6 +874,13 @@ void Runner::RunQuijibo() {
     }
     std::vector<std::string> files_in = logs;
     Stage("plot", "plot", {{"labels", labels}}, files_in, opt_hashes, [&](const std::string& dir) {
+      // Nothing to draw is a result of the optimization, not a failure of the run.
+      const auto drawable = [](const std::string& l) { return HasEnergies(ReadConvergenceLog(l)); };
+      if (std::none_of(logs.begin(), logs.end(), drawable)) {
+        WriteFileAtomically(dir + "/no-plot.txt", "no plot: no iterations and no absolute energies in the logs\n");
+        if (!quiet_) std::fprintf(stderr, "quijibo:       no plot: no iterations\n");
+        return;
+      }
       std::vector<std::string> a = {"plot"};
       a.insert(a.end(), logs.begin(), logs.end());
       a.insert(a.end(), {"-o", dir + "/convergence"});
@@ -1063,17 +1070,36 @@ void Runner::WriteReport(double total_seconds) {
          << "Absolute energy psi " << Fixed(s.value("absolute_start", 0.0), 6) << " -> "
          << Fixed(s.value("absolute_end", 0.0), 6) << " (normalized (psi+1)/2: "
          << Fixed((s.value("absolute_start", 0.0) + 1) / 2, 6) << " -> " << Fixed((s.value("absolute_end", 0.0) + 1) / 2, 6)
-         << ") in " << Fixed(s.value("seconds", 0.0), 1) << " s. Map: `" << name << "/map.json`.\n\n"
-         << "| level | pass | stop | iterations | evaluations | seconds | energy start | energy end | absolute end |\n"
+         << ") in " << Fixed(s.value("seconds", 0.0), 1) << " s. Map: `" << name << "/map.json`, ";
+      const json& passes = s["passes"];
+      const int best = s.value("best_pass", -1);
+      if (best >= 0 && best < int(passes.size()))
+        md << "the map after level " << passes[best].value("level", 0) << " pass "
+           << passes[best].value("pass", std::string("?")) << " (pass " << best + 1 << " of " << passes.size()
+           << "), the lowest absolute energy of the run.\n\n";
+      else
+        md << "the start map: no pass lowered the absolute energy.\n\n";
+      md << "| level | pass | stop | iterations | evaluations | seconds | energy start | energy end | absolute end |\n"
             "|---|---|---|---|---|---|---|---|---|\n";
-      for (const json& p : s["passes"])
+      for (std::size_t k = 0; k < passes.size(); ++k) {
+        const json& p = passes[k];
         md << "| " << p.value("level", 0) << " | " << p.value("pass", std::string("?")) << " | "
-           << p.value("stop", std::string()) << " | " << p.value("iterations", 0) << " | " << p.value("evaluations", 0)
-           << " | " << Fixed(p.value("seconds", 0.0), 2) << " | " << Fixed(p.value("energy_start", 0.0), 6) << " | "
-           << Fixed(p.value("energy_end", 0.0), 6) << " | " << Fixed(p.value("absolute_end", 0.0), 6) << " |\n";
+           << p.value("stop", std::string()) << (p.value("stalled", false) ? " (**stalled**)" : "") << " | "
+           << p.value("iterations", 0) << " | " << p.value("evaluations", 0) << " | "
+           << Fixed(p.value("seconds", 0.0), 2) << " | " << Fixed(p.value("energy_start", 0.0), 6) << " | "
+           << Fixed(p.value("energy_end", 0.0), 6) << " | " << Fixed(p.value("absolute_end", 0.0), 6)
+           << (int(k) == best ? " (best)" : "") << " |\n";
+      }
       md << "\n";
+      for (const json& p : passes)
+        if (p.value("stalled", false))
+          md << "**Stalled:** level " << p.value("level", 0) << " pass " << p.value("pass", std::string("?"))
+             << " (pass " << p.value("pass_index", 0) + 1 << " of the level) made no iteration: "
+             << p.value("stall_reason", p.value("stop", std::string())) << ".\n\n";
     }
     image("plot/convergence.png", "convergence: (psi+1)/2 per step (line: current level, dashed: finest grid)");
+    if (exists("plot/no-plot.txt"))
+      md << "No convergence plot: no iterations and no absolute energies in the logs.\n\n";
   }
   const json ms = ReadStageFile(P("mesh/summary.json"));
   if (ms.is_object() && ms.value("triangles", 0LL) == 0) {

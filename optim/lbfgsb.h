@@ -1,15 +1,16 @@
 // Bound-constrained L-BFGS (L-BFGS-B), templated on the scalar type, built from LBFGSpp's pieces
-// (Debian liblbfgspp-dev 0.1.0: BFGSMat, Cauchy point, subspace minimization, More-Thuente line
-// search). We drive the iteration ourselves rather than call LBFGSBSolver::minimize because the
-// optimizer needs what minimize does not give: a callback after every iteration (logs,
-// checkpoints, interruption), the reason it stopped, and a recovery from line-search failures
-// (LBFGSpp throws): as TAO's BLMVM in the reference code, the memory is reset and the step retried
-// once along the projected gradient; a second failure ends the pass.
+// (Debian liblbfgspp-dev 0.1.0: BFGSMat, Cauchy point, subspace minimization) and our own
+// Moré–Thuente line search (line_search.h: LBFGSpp 0.1.0's misplaces its bracket). We drive the
+// iteration ourselves rather than call LBFGSBSolver::minimize because the optimizer needs what
+// minimize does not give: a callback after every iteration (logs, checkpoints, interruption), the
+// reason it stopped, and a recovery from line-search failures: as TAO's BLMVM in the reference
+// code, the memory is reset and the step retried once along the projected gradient; a second
+// failure, or a failure along the projected gradient already, ends the pass.
 #pragma once
 
 #include "quijibo/real.h"
 
-// LBFGSpp's More-Thuente line search calls std::abs by qualified name; Boost's float128 only
+// LBFGSpp's headers call std::abs by qualified name; Boost's float128 only
 // provides abs by argument-dependent lookup. This overload (declared before LBFGSpp is included)
 // is what lets the optimizer run in float128.
 namespace std {
@@ -17,6 +18,8 @@ inline quijibo::float128 abs(const quijibo::float128& x) { return boost::multipr
 }  // namespace std
 
 #include <LBFGSB.h>
+
+#include "optim/line_search.h"
 
 #include <Eigen/Core>
 #include <functional>
@@ -68,6 +71,11 @@ LbfgsbResult<Scalar> MinimizeBounded(
   param.max_linesearch = options.max_linesearch;
   param.epsilon = options.tolerance;
   param.epsilon_rel = Scalar(0);
+  LineSearchOptions<Scalar> line_search;
+  line_search.ftol = param.ftol;
+  line_search.gtol = param.wolfe;
+  line_search.min_step = param.min_step;
+  line_search.max_evaluations = options.max_linesearch;
 
   LbfgsbResult<Scalar> result;
   int evaluations = 0;
@@ -109,7 +117,9 @@ LbfgsbResult<Scalar> MinimizeBounded(
   if (first_iteration >= options.max_iterations) return finish(StopReason::kMaxIterations);
 
   // The direction from the generalized Cauchy point and the subspace minimization.
+  bool fresh = true;  // the direction is the projected steepest descent of an empty memory
   auto direction = [&](bool first) {
+    fresh = first;
     LBFGSpp::Cauchy<Scalar>::get_cauchy_point(bfgs, x, grad, lb, ub, xcp, vecc, newact, fv);
     if (first) {
       drt = xcp - x;
@@ -129,14 +139,16 @@ LbfgsbResult<Scalar> MinimizeBounded(
     Scalar step_max = std::min(param.max_step, max_step(x, drt));
     Scalar step = std::min(Scalar(1), step_max);
     try {
-      LBFGSpp::LineSearchMoreThuente<Scalar>::LineSearch(counted, fx, x, grad, step, step_max, drt, xp, param);
+      MoreThuente(counted, fx, x, grad, step, step_max, drt, xp, line_search);
     } catch (const std::exception& e) {
-      // LBFGSpp throws when the line search fails; restore the point and retry once from scratch.
+      // The line search found no decrease: restore the point and retry once from an empty memory.
+      // From a direction that already came from an empty memory the retry would repeat the same
+      // trials, so the pass ends at once.
       x = xp;
       grad = gradp;
       fx = fp;
       result.message = e.what();
-      if (retried) return finish(StopReason::kLineSearch);
+      if (retried || fresh) return finish(StopReason::kLineSearch);
       retried = true;
       ++result.line_search_restarts;
       bfgs.reset(n, options.memory);

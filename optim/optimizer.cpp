@@ -55,7 +55,17 @@ json PassSummary::ToJson() const {
           {"evaluations", evaluations}, {"seconds", seconds}, {"energy_start", energy_start},
           {"energy_end", energy_end}, {"absolute_end", absolute_end},
           {"overflowed_cells", overflowed_cells}, {"message", message},
-          {"line_search_restarts", line_search_restarts}};
+          {"line_search_restarts", line_search_restarts}, {"stalled", stalled},
+          {"stall_reason", stalled ? StallReason() : std::string()}};
+}
+
+std::string PassSummary::StallReason() const {
+  if (stop == "line-search")
+    return "the line search failed at the first step" + (message.empty() ? std::string() : " (" + message + ")");
+  if (stop == "tolerance") return "the projected gradient was below the tolerance at the start";
+  if (stop == "non-finite") return "the energy or its gradient was not finite at the start";
+  if (stop == "max-iterations") return "the iteration cap was reached before the pass began";
+  return stop;
 }
 
 PassSummary PassSummary::FromJson(const json& j) {
@@ -74,6 +84,7 @@ PassSummary PassSummary::FromJson(const json& j) {
   p.overflowed_cells = j.at("overflowed_cells");
   p.message = j.value("message", "");
   p.line_search_restarts = j.value("line_search_restarts", 0);
+  p.stalled = j.value("stalled", p.iterations == 0);
   return p;
 }
 
@@ -86,21 +97,34 @@ json OptimizeSummary::ToJson(const OptimizeOptions& o) const {
           {"level_weights", o.level_weights == LevelWeights::kSampleFinest ? "sample" : "recompute"},
           {"alpha", o.energy.alpha}, {"memory", o.memory}, {"complete", complete},
           {"seconds", seconds}, {"absolute_start", absolute_start}, {"absolute_end", absolute_end},
-          {"passes", passes}};
+          {"best_pass", best_pass}, {"passes", passes}};
+}
+
+std::string OptimizeSummary::BestPassName() const {
+  if (best_pass < 0 || best_pass >= int(passes.size())) return "the start map: no pass improved on it";
+  const PassSummary& p = passes[std::size_t(best_pass)];
+  return "the map after level " + std::to_string(p.level) + " pass " + std::string(1, p.kind) + " (pass " +
+         std::to_string(best_pass + 1) + " of " + std::to_string(passes.size()) + ")";
 }
 
 std::string OptimizeSummary::Report() const {
   std::ostringstream s;
   char line[256];
   s << "level pass  stop            iters  evals   seconds   energy start -> end      absolute\n";
-  for (const PassSummary& p : passes) {
-    std::snprintf(line, sizeof line, "%5d  %c    %-14s %6d %6d %9.2f   %+.6f -> %+.6f   %+.6f\n", p.level,
+  for (std::size_t k = 0; k < passes.size(); ++k) {
+    const PassSummary& p = passes[k];
+    std::snprintf(line, sizeof line, "%5d  %c    %-14s %6d %6d %9.2f   %+.6f -> %+.6f   %+.6f%s%s\n", p.level,
                   p.kind, p.stop.c_str(), p.iterations, p.evaluations, p.seconds, p.energy_start,
-                  p.energy_end, p.absolute_end);
+                  p.energy_end, p.absolute_end, int(k) == best_pass ? "  best" : "",
+                  p.stalled ? "  STALLED" : "");
     s << line;
   }
-  std::snprintf(line, sizeof line, "total %.1f s; absolute energy %+.6f -> %+.6f%s\n", seconds, absolute_start,
-                absolute_end, complete ? "" : " (interrupted)");
+  for (const PassSummary& p : passes)
+    if (p.stalled)
+      s << "stalled: level " << p.level << " pass " << p.kind << " (pass " << p.pass_index + 1
+        << " of the level) made no iteration: " << p.StallReason() << "\n";
+  std::snprintf(line, sizeof line, "total %.1f s; absolute energy %+.6f -> %+.6f (%s)%s\n", seconds,
+                absolute_start, absolute_end, BestPassName().c_str(), complete ? "" : " (interrupted)");
   s << line;
   return s.str();
 }
@@ -206,6 +230,9 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   double elapsed_before = 0;
   Vector x = map.variables().cast<Scalar>();
   Vector pass_start_x;
+  // The result: the lowest absolute energy seen at the start and at pass ends.
+  Vector best_x = x;
+  double best_absolute = 0;
   if (o.resume) {
     const std::string text = ReadFile(paths.checkpoint);
     const json c = ParseJson(text, paths.checkpoint);
@@ -230,11 +257,20 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     pass_start_x = read_vec("pass_start_x");
     if (x.size() != map.variable_count()) r.fail("/x", "does not match the map's variable count");
     for (const json& p : c.at("passes")) summary.passes.push_back(PassSummary::FromJson(p));
+    // A checkpoint without the best map (an older version) counts only the start map, which is
+    // `map` on resume.
+    best_absolute = summary.absolute_start;
+    if (c.contains("best_x")) {
+      best_x = read_vec("best_x");
+      if (best_x.size() != x.size()) r.fail("/best_x", "does not match the map's variable count");
+      best_absolute = r.number("/best_absolute");
+      summary.best_pass = int(r.integer("/best_pass"));
+    }
     if (c.value("complete", false)) {
-      map.set_variables(x.template cast<double>());
+      map.set_variables(best_x.template cast<double>());
       summary.complete = true;
       summary.seconds = elapsed_before;
-      summary.absolute_end = summary.passes.empty() ? summary.absolute_start : summary.passes.back().absolute_end;
+      summary.absolute_end = best_absolute;
       return summary;
     }
     // Drop log lines written after the checkpoint: the resumed run writes them again.
@@ -267,19 +303,19 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   };
   if (!o.resume) {
     summary.absolute_start = absolute_energy(x);
+    best_absolute = summary.absolute_start;
     emit({{"type", "run"}, {"schedule", o.schedule.notation()}, {"evaluator", o.evaluator},
           {"precision", PrecisionName(o.precision)}, {"backend", o.backend}, {"weights", WeightFieldName(o.weights)},
           {"roots", {{"top", map.top_count()}, {"bottom", map.bottom_count()}}}, {"step", 0},
           {"absolute_energy", summary.absolute_start}});
   }
-  const int finest_n = std::max({sdf.frame.dims[0], sdf.frame.dims[1], sdf.frame.dims[2]});
 
   auto write_checkpoint = [&](int level_index, int pass_index, int iteration, const Vector& xs,
                               const Vector& pass_start, bool complete) {
     log.flush();
     json c;
     c["format"] = "quijibo-checkpoint";
-    c["version"] = 1;
+    c["version"] = 2;
     c["fingerprint"] = fingerprint;
     c["complete"] = complete;
     c["level_index"] = level_index;
@@ -294,6 +330,11 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     for (Eigen::Index k = 0; k < pass_start.size(); ++k) pv.push_back(Exact(pass_start[k]));
     c["x"] = xv;
     c["pass_start_x"] = pv;
+    json bv = json::array();
+    for (Eigen::Index k = 0; k < best_x.size(); ++k) bv.push_back(Exact(best_x[k]));
+    c["best_x"] = bv;
+    c["best_absolute"] = best_absolute;
+    c["best_pass"] = summary.best_pass;
     json passes = json::array();
     for (const PassSummary& p : summary.passes) passes.push_back(p.ToJson());
     c["passes"] = passes;
@@ -332,15 +373,15 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
         line["step"] = step;
         emit(line);
       }
-      // Weights of this pass.
-      objective->SetWeights(grid.weight, grid.eta);
+      // Weights of this pass: the level's, or for R the reweighted field of the pass's start map.
+      EnergyGrid rgrid;
       if (spec.kind == PassKind::kReweighted) {
-        ReweightCounts counts;
         const std::vector<double> rw =
-            ReweightedWeights(sdf, finest_w, absolute.LogModulus(pass_start_x.template cast<double>()), &counts);
-        const EnergyGrid rgrid = MakeEnergyGrid(sdf, rw, o.weights, level.resolution, LevelWeights::kSampleFinest, 0.0);
-        objective->SetWeights(rgrid.weight, rgrid.eta);
+            ReweightedWeights(sdf, finest_w, absolute.LogModulus(pass_start_x.template cast<double>()));
+        rgrid = MakeEnergyGrid(sdf, rw, o.weights, level.resolution, LevelWeights::kSampleFinest, 0.0);
       }
+      const EnergyGrid& pass_grid = spec.kind == PassKind::kReweighted ? rgrid : grid;
+      objective->SetWeights(pass_grid.weight, pass_grid.eta);
       const bool variable = spec.kind == PassKind::kVariable;
       const EnergyMode mode = variable ? EnergyMode::kVariable : EnergyMode::kFull;
       if (variable) objective->BeginVariablePass(x);
@@ -385,15 +426,8 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
           a["iteration"] = it;
           a["energy"] = absolute_energy(cur);
           emit(a);
-          if (spec.kind == PassKind::kReweighted || !share) {}  // absolute_energy swaps weights back below
-          if (share) objective->SetWeights(grid.weight, grid.eta);
-          if (share && spec.kind == PassKind::kReweighted) {
-            // restore this pass's reweighted field on the shared evaluator
-            const std::vector<double> rw =
-                ReweightedWeights(sdf, finest_w, absolute.LogModulus(pass_start_x.template cast<double>()));
-            const EnergyGrid rgrid = MakeEnergyGrid(sdf, rw, o.weights, level.resolution, LevelWeights::kSampleFinest, 0.0);
-            objective->SetWeights(rgrid.weight, rgrid.eta);
-          }
+          // The shared evaluator now holds the original weights: give it this pass's back.
+          if (share) objective->SetWeights(pass_grid.weight, pass_grid.eta);
         }
         if (g_interrupted) {
           Vector cur = x;
@@ -436,6 +470,12 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       ps.energy_end = ToDouble(res.f);
       ps.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_t0).count();
       ps.absolute_end = absolute_energy(x);
+      ps.stalled = ps.iterations == 0;
+      if (ps.absolute_end < best_absolute) {
+        best_absolute = ps.absolute_end;
+        best_x = x;
+        summary.best_pass = int(summary.passes.size());
+      }
       summary.passes.push_back(ps);
       json line = ps.ToJson();
       line["type"] = "pass_end";
@@ -450,12 +490,11 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       level_map.set_variables(x.template cast<double>());
       WriteMap(o.out_dir + "/map_level_" + std::to_string(level.resolution) + ".json", level_map);
     }
-    (void)finest_n;
   }
-  map.set_variables(x.template cast<double>());
+  map.set_variables(best_x.template cast<double>());
   summary.complete = !interrupted;
   summary.seconds = elapsed();
-  summary.absolute_end = absolute_energy(x);
+  summary.absolute_end = best_absolute;
   WriteFileAtomically(paths.summary, summary.ToJson(o).dump(1) + "\n");
   return summary;
 }

@@ -7,8 +7,12 @@
 //                      the finest grid with the original weights, always by the exact log-linear
 //                      evaluator so curves of all precisions compare), pass start/end lines
 //   checkpoint.json    every `checkpoint_every` iterations, at pass ends and on SIGINT/SIGTERM
-//   map_level_<N>.json the map after each level;  map.json  the final map
+//   map_level_<N>.json the map after each level;  map.json  the result (see below)
 //   summary.json       each pass's stop reason, iterations, evaluations, time and energies
+//
+// The result is the map with the lowest absolute energy among the start and every pass end, not
+// the last one: an R pass fits the reweighted field and usually ends above the F pass before it.
+// A pass that made no iteration is flagged as stalled (with the reason) and the run goes on.
 //
 // Resumption is exact for checkpoints taken during a run: at every checkpoint the L-BFGS memory
 // restarts (in the uninterrupted run too), so the state in the file determines the rest of the
@@ -55,6 +59,8 @@ struct PassSummary {
   long long overflowed_cells = 0;  // largest count seen in one evaluation (cached evaluator)
   std::string message;
   int line_search_restarts = 0;  // line-search failures recovered by resetting the L-BFGS memory
+  bool stalled = false;          // no iteration: the pass could not (or did not need to) move
+  std::string StallReason() const;  // why a stalled pass did not move, in words
   nlohmann::json ToJson() const;
   static PassSummary FromJson(const nlohmann::json& j);
 };
@@ -62,14 +68,18 @@ struct PassSummary {
 struct OptimizeSummary {
   std::vector<PassSummary> passes;
   double seconds = 0;
-  double absolute_start = 0, absolute_end = 0;
+  double absolute_start = 0;
+  double absolute_end = 0;   // of the returned map: the best over the start and the pass ends
+  int best_pass = -1;        // index into passes of the returned map; -1: the start
   bool complete = false;     // false when interrupted
   nlohmann::json ToJson(const OptimizeOptions& options) const;
   std::string Report() const;  // a readable table
+  std::string BestPassName() const;  // "the map after level 25 pass F (pass 2 of 10)" or the start
 };
 
 // Runs the schedule from `map` (its exponents, ln C, tau, beta are the start; its roots stay) on
-// the target `sdf`; `map` holds the result on return. Throws quijibo::Error on bad input. When a
+// the target `sdf`; `map` holds the result (the best map, see above) on return. Throws
+// quijibo::Error on bad input. When a
 // SIGINT/SIGTERM arrives, writes a checkpoint and returns with complete = false.
 OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options);
 

@@ -164,6 +164,28 @@ TEST_F(PlotTest, BadInputGetsOneLineAndNoOutputFiles) {
   expect_error("plot " + Path("ok.jsonl") + " -o " + prefix + " --label a --label b", "--label");
 }
 
+// What the optimizer writes when no pass made an iteration: the run line with the start's absolute
+// energy and pass start/end lines with "absolute_end", all at step 0. The plot draws that point.
+TEST_F(PlotTest, ALogWithoutIterationsStillGivesAPlot) {
+  std::ostringstream log;
+  log << R"j({"type":"run","schedule":"10(VF)","step":0,"absolute_energy":-0.125,"seconds":0.1})j" << "\n";
+  for (int p = 0; p < 2; ++p) {
+    const std::string where = R"("level":10,"level_index":0,"pass":")" + std::string(p ? "F" : "V") +
+                              R"(","pass_index":)" + std::to_string(p);
+    log << R"({"type":"pass_start","step":0,)" << where << R"(,"seconds":0.2})" << "\n";
+    log << R"({"type":"pass_end","step":0,)" << where
+        << R"(,"stop":"tolerance","iterations":0,"evaluations":1,"absolute_end":-0.125,"stalled":true})" << "\n";
+  }
+  Write("stalled/log.jsonl", log.str());
+  const std::string prefix = Path("convergence");
+  const CommandResult r = Quijibo("plot " + Path("stalled/log.jsonl") + " -o " + prefix);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string svg = Slurp(prefix + ".svg");
+  EXPECT_NE(svg.find("stalled absolute"), std::string::npos);
+  EXPECT_NE(svg.find("no iterations"), std::string::npos);
+  EXPECT_GT(Slurp(prefix + ".png").size(), 1000u);
+}
+
 TEST_F(PlotTest, MissingGnuplotIsAClearError) {
   Write("ok.jsonl", SyntheticLog("x", 0.02));
   const CommandResult r =

@@ -258,6 +258,40 @@ TEST(RunTest, AJuliaSetWithoutSurfaceIsReportedNotFatal) {
   fs::remove_all(dir);
 }
 
+// Passes that make no iteration (here: a tolerance no gradient is above) are flagged in the summary
+// and the report, the plot draws what there is, and the run finishes with the start map.
+TEST(RunTest, PassesThatCannotMoveAreReportedNotFatal) {
+  const std::string dir = TempDir("stalled");
+  const std::string exp = dir + "/tiny.json", out = dir + "/results";
+  json e = Tiny();
+  e["optimizer"]["schedule"] = json::parse(
+      R"({"levels": [{"resolution": 10,
+                      "passes": [{"kind": "V", "tolerance": 1e9}, {"kind": "F", "tolerance": 1e9}]}]})");
+  e["mesh"]["enabled"] = false;
+  Write(exp, e.dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  if (HaveGnuplot()) {
+    EXPECT_TRUE(fs::exists(out + "/plot/convergence.png"));
+  }
+  const json s = json::parse(Slurp(out + "/optimized/summary.json"));
+  ASSERT_EQ(s["passes"].size(), 2u);
+  for (const json& p : s["passes"]) {
+    EXPECT_EQ(p["iterations"], 0) << p;
+    EXPECT_EQ(p["stalled"], true) << p;
+    EXPECT_NE(p["stall_reason"].get<std::string>().find("tolerance"), std::string::npos) << p;
+  }
+  EXPECT_EQ(s["best_pass"], -1);
+  EXPECT_EQ(s["absolute_end"], s["absolute_start"]);
+  const std::string report = Slurp(out + "/report.md");
+  EXPECT_NE(report.find("**Stalled:** level 10 pass V"), std::string::npos) << report;
+  EXPECT_NE(report.find("**Stalled:** level 10 pass F"), std::string::npos) << report;
+  const json start = json::parse(Slurp(out + "/initial/map.json"));
+  const json result = json::parse(Slurp(out + "/optimized/map.json"));
+  for (const char* k : {"top", "bottom", "ln_C", "tau", "beta"}) EXPECT_EQ(start[k], result[k]) << k;
+  fs::remove_all(dir);
+}
+
 // No temporary file, no truncated JSON: what a failed run leaves is whole.
 void ExpectNothingPartial(const std::string& out) {
   if (!fs::exists(out)) return;

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <sstream>
 #include <filesystem>
 #include <fstream>
@@ -98,6 +99,50 @@ TYPED_TEST(LbfgsbTest, SolvesABoundedRosenbrock) {
               return IterationAction::kContinue;
             }).stop),
             StopReason::kMaxIterations);
+}
+
+// phi(t) = a t^2 - t + c sin(w t): smooth, descending at 0, with ripples that put higher values
+// between lower ones, where a bracketing update on the wrong side of the minimizer shows.
+struct RippledLine {
+  double a, w, c;
+  double operator()(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
+    const double t = x[0];
+    g.resize(1);
+    g[0] = 2 * a * t - 1 + c * w * std::cos(w * t);
+    return a * t * t - t + c * std::sin(w * t);
+  }
+};
+
+// The line search always returns a step with sufficient decrease on a descent direction, and a
+// strong Wolfe step where one is in reach; on (0.05, 6.2, 0.16) LBFGSpp 0.1.0's search spends its
+// 30 trials on the wrong side of the minimizer and throws.
+TEST(LineSearchTest, MoreThuenteFindsADecreaseOnRippledLines) {
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Zero(1), d = Eigen::VectorXd::Ones(1);
+  int cases = 0, wolfe = 0;
+  for (int ia = 0; ia < 20; ++ia)
+    for (int iw = 0; iw < 20; ++iw)
+      for (int ic = 0; ic < 10; ++ic) {
+        RippledLine phi{0.05 + 0.1 * ia, 1 + 1.3 * iw, 0.02 * ic};
+        Eigen::VectorXd x = x0, g;
+        double f = phi(x, g);
+        const double f0 = f, g0 = g[0];
+        if (g0 >= 0) continue;
+        ++cases;
+        double step = 1;
+        ASSERT_NO_THROW(MoreThuente(phi, f, x, g, step, 1e20, d, x0)) << phi.a << " " << phi.w << " " << phi.c;
+        EXPECT_LE(f, f0 + 1e-4 * step * g0);
+        EXPECT_EQ(x[0], step);
+        wolfe += std::abs(g[0]) <= 0.9 * std::abs(g0);
+      }
+  EXPECT_GT(cases, 2000);
+  EXPECT_GT(wolfe, cases * 95 / 100);
+  RippledLine phi{0.05, 6.2, 0.16};
+  Eigen::VectorXd x = x0, g;
+  double f = phi(x, g), step = 1;
+  const double f0 = f, g0 = g[0];
+  MoreThuente(phi, f, x, g, step, 1e20, d, x0);
+  EXPECT_LE(f, f0 + 1e-4 * step * g0);
+  EXPECT_LE(std::abs(g[0]), 0.9 * std::abs(g0));
 }
 
 // The Ceres back end keeps x >= 0 by x = y^2 and reaches the bound only asymptotically.
@@ -200,6 +245,36 @@ TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {
   EXPECT_EQ(iterations, total);
   EXPECT_TRUE(std::filesystem::exists(o.out_dir + "/summary.json"));
   EXPECT_TRUE(std::filesystem::exists(o.out_dir + "/map_level_20.json"));
+  std::filesystem::remove_all(o.out_dir);
+}
+
+// The result is the map of the lowest absolute energy (start or any pass end), not the last map,
+// and the summary names its pass. The last pass here, on a coarser level, fits that level's grid
+// and ends above the pass before on the finest one, as an R pass does with its reweighted field.
+TEST(OptimizerTest, TheResultIsTheBestMapOverAllPasses) {
+  SmallRun run;
+  OptimizeOptions o;
+  o.schedule = Schedule::Parse("20(VF)8(V)");
+  for (auto& l : o.schedule.levels)
+    for (auto& p : l.passes) p.max_iterations = 40;
+  o.out_dir = TempDir("best");
+  const OptimizeSummary s = Optimize(run.sdf, run.map, o);
+  ASSERT_TRUE(s.complete);
+  double best = s.absolute_start;
+  int best_pass = -1;
+  for (std::size_t k = 0; k < s.passes.size(); ++k)
+    if (s.passes[k].absolute_end < best) best = s.passes[k].absolute_end, best_pass = int(k);
+  // The case this test is about: the last pass is not the best.
+  EXPECT_GT(s.passes.back().absolute_end, best) << "the last pass ended lowest: the test proves less";
+  EXPECT_EQ(s.best_pass, best_pass);
+  EXPECT_EQ(s.absolute_end, best);
+  const double map_energy = LogLinearEnergy(run.map, MakeEnergyGrid(run.sdf, WeightField::kLayer))
+                                .Evaluate(run.map.variables(), EnergyMode::kFull, false)
+                                .energy;
+  EXPECT_NEAR(map_energy, best, 1e-12);
+  const auto summary = nlohmann::json::parse(std::ifstream(o.out_dir + "/summary.json"));
+  EXPECT_EQ(summary["best_pass"], best_pass);
+  EXPECT_EQ(summary["absolute_end"].get<double>(), best);
   std::filesystem::remove_all(o.out_dir);
 }
 
