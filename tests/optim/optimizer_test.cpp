@@ -254,6 +254,7 @@ TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {
 TEST(OptimizerTest, TheResultIsTheBestMapOverAllPasses) {
   SmallRun run;
   OptimizeOptions o;
+  o.weights = WeightField::kLayer;
   o.schedule = Schedule::Parse("20(VF)8(V)");
   for (auto& l : o.schedule.levels)
     for (auto& p : l.passes) p.max_iterations = 40;
