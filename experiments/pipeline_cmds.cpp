@@ -178,6 +178,9 @@ void AddModuleCommands(CLI::App& app) {
   m->add_option("--band", a->kernel.band_cells, "log-kernel: half-width of the band where L follows the distance, in cells")->capture_default_str();
   m->add_option("--band-amplitude", a->kernel.amplitude, "log-kernel: |L| at the band's edge")->capture_default_str();
   m->add_option("--ridge", a->kernel.ridge, "log-kernel: Tikhonov weight on the exponents")->capture_default_str();
+  m->add_option("--refine-rounds", a->kernel.refine_rounds,
+                "log-kernel: rounds that add root pairs where the fit is on the wrong side (thin walls)")
+      ->capture_default_str();
   m->add_option("--epsilon", a->monopole.fit.epsilon, "Stop at this relative residual")->capture_default_str();
   m->add_option("--fit-target", a->fit_target,
                 "reference: fit 1 - P as the reference code (top and bottom roots, the paper's results); "
@@ -237,7 +240,7 @@ void AddModuleCommands(CLI::App& app) {
                         {"resolution", a->resolution}, {"roots", a->kernel.roots},
                         {"offset_cells", a->kernel.offset_cells}, {"band_cells", a->kernel.band_cells},
                         {"band_amplitude", a->kernel.amplitude}, {"ridge", a->kernel.ridge},
-                        {"origin_root", a->kernel.origin_root},
+                        {"origin_root", a->kernel.origin_root}, {"refine_rounds", a->kernel.refine_rounds},
                         {"sampling_seed", a->monopole.sampling.seed}};
     } else {
       Progress progress("monopoles", 1.0, false);
@@ -288,7 +291,7 @@ void AddModuleCommands(CLI::App& app) {
                    {"iou", start.iou}, {"saturated_fraction", start.saturated}, {"inverted", start.inverted}}}};
     if (kernel) {
       summary["log_kernel"] = {{"rows", kfit.rows}, {"band_rows", kfit.band_rows}, {"far_rows", kfit.far_rows},
-                               {"active_set_iterations", kfit.iterations}, {"top", kfit.top},
+                               {"active_set_iterations", kfit.iterations}, {"refine_rounds", kfit.refine_rounds}, {"top", kfit.top},
                                {"bottom", kfit.bottom}, {"exponent_sum", kfit.exponent_sum},
                                {"rms_band", kfit.rms_band}, {"sign_agreement", kfit.sign_agreement}};
       summary["seconds"] = {{"sdf", sdf_seconds}, {"fit", kfit.seconds}, {"png", png_seconds}};

@@ -313,7 +313,7 @@ json ResolveExperiment(const std::string& path) {
         r.fail(ip + "/kind", "\"log-kernel\" needs a mesh target (\"target\": {\"mesh\": ...}); use \"random\" or \"map\"");
       if (r.has(ip))
         r.allow_keys(ip, {"kind", "roots", "root_offset", "band", "band_amplitude", "ridge", "sampling_seed",
-                          "origin_root", "png_size"});
+                          "origin_root", "refine_rounds", "png_size"});
       const KernelFitOptions ko;
       rd.Int(ip + "/roots", ko.roots, 8, 4000);
       rd.Num(ip + "/root_offset", ko.offset_cells, 0.0, 50.0, true);
@@ -322,6 +322,7 @@ json ResolveExperiment(const std::string& path) {
       rd.Num(ip + "/ridge", ko.ridge, 0.0, 1.0);
       rd.Int(ip + "/sampling_seed", seed, 0, (1ll << 53));
       rd.Bool(ip + "/origin_root", ko.origin_root);
+      rd.Int(ip + "/refine_rounds", ko.refine_rounds, 0, 10);
       rd.Int(ip + "/png_size", 800, 16, 8192);
     } else if (kind == "monopoles") {
       if (target_kind != "mesh")
@@ -782,6 +783,7 @@ void Runner::RunQuijibo() {
                                         "--band=" + Num(in["band"]),
                                         "--band-amplitude=" + Num(in["band_amplitude"]),
                                         "--ridge=" + Num(in["ridge"]),
+                                        "--refine-rounds", Int(in["refine_rounds"]),
                                         "--sampling-seed", Int(in["sampling_seed"]),
                                         "--png-size", Int(in["png_size"])};
           if (!in["origin_root"].get<bool>()) a.push_back("--no-origin-root");

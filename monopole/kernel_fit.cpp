@@ -20,6 +20,8 @@ std::string KernelFitOptions::validate() const {
   if (max_band_rows < 1000) return "max band rows must be >= 1000";
   if (coarse_stride < 1 || coarse_stride > 16) return "coarse stride must be in [1, 16]";
   if (active_set_iterations < 1 || active_set_iterations > 50) return "active-set iterations must be in [1, 50]";
+  if (refine_rounds < 0 || refine_rounds > 10) return "refine rounds must be in [0, 10]";
+  if (!(refine_above >= 0 && refine_above <= 1)) return "refine threshold must be in [0, 1]";
   return {};
 }
 
@@ -57,32 +59,34 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
   const double h = sdf.frame.spacing;
   const double delta = o.band_cells * h, s = o.amplitude;
 
-  // Root positions: pairs along the normals of blue-noise surface samples.
-  SamplingOptions so;
-  so.count = o.roots / 2;
-  so.seed = o.seed;
-  const std::vector<Vec3> samples = PoissonDiskSample(vertices, triangles, so);
+  // Root positions: pairs along the normals of surface points. A side whose root cannot be put at
+  // least a quarter cell off the surface (a zero-thickness shell) gets none: it would only make a
+  // blob.
   std::vector<Vec4> roots;
-  for (const Vec3& p : samples) {
+  std::vector<Vec3> points;  // the surface points that have roots
+  auto add_pair = [&](const Vec3& p) {
     Vec3 n = Gradient(sdf, p);
     const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(len > 1e-12)) continue;
+    if (!(len > 1e-12)) return;
     for (double& c : n) c /= len;
+    points.push_back(p);
     for (int side : {-1, 1}) {
       // Shorten the offset until the root is still about as far from the surface as it was moved:
       // past the medial axis (a thin finger, a narrow gap) it would sit nearer the other side.
-      double d = o.offset_cells * h;
-      Vec3 q;
-      for (int k = 0; k < 12; ++k) {
-        q = {p[0] + side * d * n[0], p[1] + side * d * n[1], p[2] + side * d * n[2]};
-        if (side * sdf.sample(q) > 0.6 * d) break;
-        d *= 0.75;
+      for (double d = o.offset_cells * h; d >= 0.25 * h; d *= 0.75) {
+        const Vec3 q{p[0] + side * d * n[0], p[1] + side * d * n[1], p[2] + side * d * n[2]};
+        if (side * sdf.sample(q) > 0.6 * d) {
+          roots.push_back({q[0], q[1], q[2], 0.0});
+          break;
+        }
       }
-      roots.push_back({q[0], q[1], q[2], 0.0});
     }
-  }
-  if (roots.empty()) throw Error("log-kernel fit: no surface normals (is the signed distance field flat?)");
-  const int R = int(roots.size()), cols = R + 1;
+  };
+  SamplingOptions so;
+  so.count = o.roots / 2;
+  so.seed = o.seed;
+  for (const Vec3& p : PoissonDiskSample(vertices, triangles, so)) add_pair(p);
+  if (roots.empty()) throw Error("log-kernel fit: no root could be placed off the surface (is the shape a shell?)");
 
   // Rows: the band at full resolution, a coarse lattice beyond it, and two far spheres.
   struct Row {
@@ -131,56 +135,94 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
     if (r.phi < 0) r.weight *= w_out / w_in;
   const int M = int(rows.size());
 
-  // The design matrix: a column of ones (ln C) and the log-distances to every root.
-  Eigen::MatrixXd A(M, cols);
-  Eigen::VectorXd g(M), w(M), fixed(M);
-#pragma omp parallel for schedule(static)
-  for (int r = 0; r < M; ++r) {
-    A(r, 0) = 1.0;
-    for (int i = 0; i < R; ++i) A(r, i + 1) = LogDistance(rows[r].x, roots[i], 0.0);
-    g[r] = s * std::clamp(rows[r].phi / delta, -1.0, 1.0);
-    fixed[r] = o.origin_root ? LogDistance(rows[r].x, Vec4{0, 0, 0, 0}) : 0.0;
-    w[r] = rows[r].weight;
-  }
-  for (int r = 0; r < M; ++r)
-    if (!A.row(r).allFinite() || !std::isfinite(fixed[r])) w[r] = 0, A.row(r).setZero(), fixed[r] = 0;  // on a root
-
-  std::vector<char> active(M, 1);
-  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(cols, cols);
-  auto add_rows = [&](const std::vector<int>& which, double sign) {
-    if (which.empty()) return;
-    Eigen::MatrixXd B(Eigen::Index(which.size()), cols);
-    for (std::size_t k = 0; k < which.size(); ++k) B.row(Eigen::Index(k)) = std::sqrt(w[which[k]]) * A.row(which[k]);
-    N.selfadjointView<Eigen::Lower>().rankUpdate(B.transpose(), sign);
-  };
-  std::vector<int> all(M);
-  for (int r = 0; r < M; ++r) all[r] = r;
-  add_rows(all, 1.0);
-  Eigen::VectorXd e = Eigen::VectorXd::Zero(cols), L;
-  int iterations = 0;
-  for (int it = 0; it < o.active_set_iterations; ++it) {
-    ++iterations;
-    Eigen::MatrixXd Nr = N.selfadjointView<Eigen::Lower>();
-    const double mean_diag = Nr.diagonal().tail(R).mean();
-    for (int i = 1; i < cols; ++i) Nr(i, i) += o.ridge * mean_diag;
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cols);
-    for (int r = 0; r < M; ++r)
-      if (active[r]) rhs.noalias() += (w[r] * (g[r] - fixed[r])) * A.row(r).transpose();
-    e = Nr.ldlt().solve(rhs);
-    if (!e.allFinite()) throw Error("log-kernel fit: the least-squares system is singular");
-    L = A * e + fixed;
-    // One-sided rows leave while satisfied and come back when violated.
-    std::vector<int> leave, enter;
+  Eigen::VectorXd e, L, g(M), w(M), fixed(M);
+  int iterations = 0, rounds = 0;
+  for (int round = 0;; ++round) {
+    // The design matrix: a column of ones (ln C) and the log-distances to every root.
+    const int R = int(roots.size()), cols = R + 1;
+    Eigen::MatrixXd A(M, cols);
+  #pragma omp parallel for schedule(static)
     for (int r = 0; r < M; ++r) {
-      if (rows[r].two_sided) continue;
-      const bool satisfied = rows[r].phi > 0 ? L[r] >= s : L[r] <= -s;
-      if (satisfied && active[r]) leave.push_back(r), active[r] = 0;
-      else if (!satisfied && !active[r]) enter.push_back(r), active[r] = 1;
+      A(r, 0) = 1.0;
+      for (int i = 0; i < R; ++i) A(r, i + 1) = LogDistance(rows[r].x, roots[i], 0.0);
+      g[r] = s * std::clamp(rows[r].phi / delta, -1.0, 1.0);
+      fixed[r] = o.origin_root ? LogDistance(rows[r].x, Vec4{0, 0, 0, 0}) : 0.0;
+      w[r] = rows[r].weight;
     }
-    if (leave.empty() && enter.empty()) break;
-    add_rows(leave, -1.0);
-    add_rows(enter, 1.0);
+    for (int r = 0; r < M; ++r)
+      if (!A.row(r).allFinite() || !std::isfinite(fixed[r])) w[r] = 0, A.row(r).setZero(), fixed[r] = 0;  // on a root
+
+    std::vector<char> active(M, 1);
+    Eigen::MatrixXd N = Eigen::MatrixXd::Zero(cols, cols);
+    auto add_rows = [&](const std::vector<int>& which, double sign) {
+      if (which.empty()) return;
+      Eigen::MatrixXd B(Eigen::Index(which.size()), cols);
+      for (std::size_t k = 0; k < which.size(); ++k) B.row(Eigen::Index(k)) = std::sqrt(w[which[k]]) * A.row(which[k]);
+      N.selfadjointView<Eigen::Lower>().rankUpdate(B.transpose(), sign);
+    };
+    std::vector<int> all(M);
+    for (int r = 0; r < M; ++r) all[r] = r;
+    add_rows(all, 1.0);
+    e = Eigen::VectorXd::Zero(cols);
+    for (int it = 0; it < o.active_set_iterations; ++it) {
+      ++iterations;
+      Eigen::MatrixXd Nr = N.selfadjointView<Eigen::Lower>();
+      const double mean_diag = Nr.diagonal().tail(R).mean();
+      for (int i = 1; i < cols; ++i) Nr(i, i) += o.ridge * mean_diag;
+      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cols);
+      for (int r = 0; r < M; ++r)
+        if (active[r]) rhs.noalias() += (w[r] * (g[r] - fixed[r])) * A.row(r).transpose();
+      e = Nr.ldlt().solve(rhs);
+      if (!e.allFinite()) throw Error("log-kernel fit: the least-squares system is singular");
+      L = A * e + fixed;
+      // One-sided rows leave while satisfied and come back when violated.
+      std::vector<int> leave, enter;
+      for (int r = 0; r < M; ++r) {
+        if (rows[r].two_sided) continue;
+        const bool satisfied = rows[r].phi > 0 ? L[r] >= s : L[r] <= -s;
+        if (satisfied && active[r]) leave.push_back(r), active[r] = 0;
+        else if (!satisfied && !active[r]) enter.push_back(r), active[r] = 1;
+      }
+      if (leave.empty() && enter.empty()) break;
+      add_rows(leave, -1.0);
+      add_rows(enter, 1.0);
+    }
+
+
+    // More roots where the fit is poor: cells on the wrong side, heaviest first, projected
+    // onto the surface, each at least a pair's width (twice the offset) from every point that already has roots.
+    if (round == o.refine_rounds) break;
+    std::vector<int> wrong;
+    double wrong_weight[2] = {0, 0}, side_weight[2] = {0, 0};  // inside, outside
+    for (int r = 0; r < M - far_rows; ++r) {
+      const int side = rows[r].phi < 0 ? 0 : 1;
+      side_weight[side] += w[r];
+      if (w[r] > 0 && (L[r] < 0) != (rows[r].phi < 0)) wrong.push_back(r), wrong_weight[side] += w[r];
+    }
+    // Per side, so that a thin part (few inside cells) is not outvoted by the outside.
+    if (wrong_weight[0] <= o.refine_above * side_weight[0] && wrong_weight[1] <= o.refine_above * side_weight[1]) break;
+    std::stable_sort(wrong.begin(), wrong.end(), [&](int x, int y) { return w[x] > w[y]; });
+    const std::size_t before = points.size();
+    const double min_gap2 = std::pow(2 * o.offset_cells * h, 2);  // the pairs' own spacing
+    for (int r : wrong) {
+      if (int(points.size() - before) >= so.count / 2) break;
+      const Vec3& x = rows[r].x;
+      Vec3 n = Gradient(sdf, x);
+      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      if (!(len > 1e-12)) continue;
+      const Vec3 p{x[0] - rows[r].phi * n[0] / len, x[1] - rows[r].phi * n[1] / len, x[2] - rows[r].phi * n[2] / len};
+      bool near = false;
+      for (const Vec3& q : points)
+        if ((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]) < min_gap2) {
+          near = true;
+          break;
+        }
+      if (!near) add_pair(p);
+    }
+    if (points.size() == before) break;
+    ++rounds;
   }
+  const int R = int(roots.size());
 
   RationalMap m;
   m.frame = frame;
@@ -205,6 +247,7 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
     if ((L[r] < 0) == (rows[r].phi < 0)) agree += w[r];
   }
   out.rows = M, out.band_rows = band_rows, out.far_rows = far_rows, out.iterations = iterations;
+  out.refine_rounds = rounds;
   out.rms_band = band_w > 0 ? std::sqrt(band_sq / band_w) : 0;
   out.sign_agreement = total > 0 ? agree / total : 0;
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -79,6 +79,23 @@ TEST(KernelFit, TheOriginRootMakesTheOriginAZeroAndTheFitAccountsForIt) {
   EXPECT_GT(OneStepLogModulus(m, {0, 1.6, 0}), 0);
 }
 
+TEST(KernelFit, RefinementAddsRootsWhereTheFitIsWrong) {
+  // Few roots for a small sphere beside a large one: the first fit misses cells, refinement adds
+  // pairs there and the start does not get worse.
+  const TwoSpheres t = MakeTwoSpheres(0.7, 0.25);
+  KernelFitOptions o;
+  o.roots = 16;
+  o.origin_root = false;
+  KernelFitSummary plain, refined;
+  const RationalMap a = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &plain);
+  o.refine_rounds = 2;
+  const RationalMap b = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &refined);
+  EXPECT_EQ(plain.refine_rounds, 0);
+  EXPECT_GE(refined.refine_rounds, 1);
+  EXPECT_GT(b.root_count(), a.root_count());
+  EXPECT_GE(CheckStart(b, t.sdf).iou, CheckStart(a, t.sdf).iou - 1e-9);
+}
+
 TEST(KernelFit, IsDeterministic) {
   const TwoSpheres t = MakeTwoSpheres(0.6, 0.4);
   KernelFitOptions o;
