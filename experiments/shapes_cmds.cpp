@@ -131,7 +131,7 @@ void AddShapeCommands(CLI::App& app) {
                 "picture sheet");
   s->add_option("--suite", b->suite, "A suite.json (data/suite/suite.json: entries with name, mesh, why)");
   s->add_option("meshes", b->meshes, "More meshes (named by their file)");
-  s->add_option("--only", b->only, "Only these shape names");
+  s->add_option("--only", b->only, "Only these shape names (with --report-only: only these rows)");
   s->add_option("--schedule", b->schedule, "The optimizer schedule (notation or JSON file)")->capture_default_str();
   s->add_option("--initializer", b->initializer, "log-kernel or monopoles")
       ->capture_default_str()->check(CLI::IsMember({"log-kernel", "monopoles"}));
@@ -179,6 +179,12 @@ void AddShapeCommands(CLI::App& app) {
       const std::string saved = (fs::path(b->out) / "shapes.json").string();
       results = ParseJson(ReadFile(saved), saved);
       shapes.clear();
+      if (!b->only.empty()) {
+        json kept = json::array();
+        for (const json& r : results)
+          if (std::find(b->only.begin(), b->only.end(), r.value("name", "")) != b->only.end()) kept.push_back(r);
+        results = kept;
+      }
     }
     Progress progress("bench shapes", double(shapes.size()), false);
     for (std::size_t k = 0; k < shapes.size(); ++k) {

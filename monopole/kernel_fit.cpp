@@ -59,9 +59,7 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
   const double h = sdf.frame.spacing;
   const double delta = o.band_cells * h, s = o.amplitude;
 
-  // Root positions: pairs along the normals of surface points. A side whose root cannot be put at
-  // least a quarter cell off the surface (a zero-thickness shell) gets none: it would only make a
-  // blob.
+  // Root positions: pairs along the normals of surface points.
   std::vector<Vec4> roots;
   std::vector<Vec3> points;  // the surface points that have roots
   auto add_pair = [&](const Vec3& p) {
@@ -73,20 +71,21 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
     for (int side : {-1, 1}) {
       // Shorten the offset until the root is still about as far from the surface as it was moved:
       // past the medial axis (a thin finger, a narrow gap) it would sit nearer the other side.
-      for (double d = o.offset_cells * h; d >= 0.25 * h; d *= 0.75) {
-        const Vec3 q{p[0] + side * d * n[0], p[1] + side * d * n[1], p[2] + side * d * n[2]};
-        if (side * sdf.sample(q) > 0.6 * d) {
-          roots.push_back({q[0], q[1], q[2], 0.0});
-          break;
-        }
+      double d = o.offset_cells * h;
+      Vec3 q;
+      for (int k = 0; k < 12; ++k) {
+        q = {p[0] + side * d * n[0], p[1] + side * d * n[1], p[2] + side * d * n[2]};
+        if (side * sdf.sample(q) > 0.6 * d) break;
+        d *= 0.75;
       }
+      roots.push_back({q[0], q[1], q[2], 0.0});
     }
   };
   SamplingOptions so;
   so.count = o.roots / 2;
   so.seed = o.seed;
   for (const Vec3& p : PoissonDiskSample(vertices, triangles, so)) add_pair(p);
-  if (roots.empty()) throw Error("log-kernel fit: no root could be placed off the surface (is the shape a shell?)");
+  if (roots.empty()) throw Error("log-kernel fit: no surface normals (is the signed distance field flat?)");
 
   // Rows: the band at full resolution, a coarse lattice beyond it, and two far spheres.
   struct Row {
