@@ -46,9 +46,9 @@ struct KernelFitOptions {
   int coarse_stride = 3;       // beyond the band, one cell in stride^3
   int active_set_iterations = 6;
   // Rounds that add root pairs where the fit is on the wrong side of the surface (at most
-  // roots / 4 new roots per round). Off by default: on the thin-walled chair and mug two rounds
-  // raise the start's IoU from 0.70 to 0.81 and from 0.57 to 0.69, but they add up to half as
-  // many roots again, and the optimizer's time grows with the roots (docs/fidelity.md).
+  // roots / 4 new roots per round, a pair's width from existing pairs). Off by default: on the
+  // thin-walled mug two rounds raise the start's IoU from 0.57 to 0.69, on the chair they find no
+  // room, and they add up to half as many roots again (docs/benchmarks.md §7).
   int refine_rounds = 0;
   double refine_above = 0.0;  // refine only while more than this fraction of the fit's inside or
                               // outside cells (by weight) is on the wrong side
