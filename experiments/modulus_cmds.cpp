@@ -15,6 +15,7 @@
 
 #include "experiments/cli.h"
 #include "mesh/julia_field.h"
+#include "mesh/fidelity.h"
 #include "mesh/marching_cubes.h"
 #include "mesh/sdf.h"
 #include "mesh/sdf_command.h"
@@ -460,32 +461,6 @@ std::vector<double> NearestDistances(const std::vector<Vec3>& a, const std::vect
       if (std::isfinite(best2) && std::sqrt(best2) <= r * cell) break;
     }
     out[n] = std::sqrt(best2);
-  }
-  return out;
-}
-
-// Area-weighted random points on a mesh (seeded), for Chamfer distances.
-std::vector<Vec3> SampleSurface(const TriangleMesh& m, int count, std::uint64_t seed) {
-  std::vector<double> cdf;
-  double total = 0;
-  for (const auto& t : m.triangles) {
-    const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
-    const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    total += 0.5 * std::hypot(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]);
-    cdf.push_back(total);
-  }
-  std::vector<Vec3> out;
-  if (!(total > 0)) return out;
-  std::mt19937_64 rng(seed);
-  auto uniform = [&] { return double(rng() >> 11) * 0x1.0p-53; };
-  for (int n = 0; n < count; ++n) {
-    const std::size_t i = std::min(cdf.size() - 1, std::size_t(std::lower_bound(cdf.begin(), cdf.end(), uniform() * total) - cdf.begin()));
-    double r1 = uniform(), r2 = uniform();
-    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
-    const auto& t = m.triangles[i];
-    const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
-    out.push_back({a[0] + r1 * (b[0] - a[0]) + r2 * (c[0] - a[0]), a[1] + r1 * (b[1] - a[1]) + r2 * (c[1] - a[1]),
-                   a[2] + r1 * (b[2] - a[2]) + r2 * (c[2] - a[2])});
   }
   return out;
 }

@@ -73,38 +73,32 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
   return f;
 }
 
-namespace {
-
-// Points uniformly distributed by area (seeded; portable doubles from the top 53 bits).
-std::vector<Vec3> AreaSamples(const TriangleMesh& m, int count, std::uint64_t seed) {
+std::vector<Vec3> SampleSurface(const TriangleMesh& m, int count, std::uint64_t seed) {
   std::vector<double> cdf;
   double total = 0;
   for (const auto& t : m.triangles) {
     const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
     const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    const Vec3 x{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-    total += 0.5 * std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    total += 0.5 * std::hypot(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]);
     cdf.push_back(total);
   }
-  if (!(total > 0)) throw Error("fidelity: a mesh without area");
+  std::vector<Vec3> out;
+  if (!(total > 0)) return out;
   std::mt19937_64 rng(seed);
   auto uniform = [&] { return double(rng() >> 11) * 0x1.0p-53; };
-  std::vector<Vec3> p;
-  p.reserve(std::size_t(count));
-  for (int k = 0; k < count; ++k) {
-    const std::size_t t = std::min(std::size_t(std::lower_bound(cdf.begin(), cdf.end(), uniform() * total) - cdf.begin()),
-                                   cdf.size() - 1);
+  out.reserve(std::size_t(count));
+  for (int n = 0; n < count; ++n) {
+    const std::size_t i =
+        std::min(cdf.size() - 1, std::size_t(std::lower_bound(cdf.begin(), cdf.end(), uniform() * total) - cdf.begin()));
     double r1 = uniform(), r2 = uniform();
     if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
-    const auto& tri = m.triangles[t];
-    const Vec3 &a = m.vertices[tri[0]], &b = m.vertices[tri[1]], &c = m.vertices[tri[2]];
-    p.push_back({a[0] + r1 * (b[0] - a[0]) + r2 * (c[0] - a[0]), a[1] + r1 * (b[1] - a[1]) + r2 * (c[1] - a[1]),
-                 a[2] + r1 * (b[2] - a[2]) + r2 * (c[2] - a[2])});
+    const auto& t = m.triangles[i];
+    const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
+    out.push_back({a[0] + r1 * (b[0] - a[0]) + r2 * (c[0] - a[0]), a[1] + r1 * (b[1] - a[1]) + r2 * (c[1] - a[1]),
+                   a[2] + r1 * (b[2] - a[2]) + r2 * (c[2] - a[2])});
   }
-  return p;
+  return out;
 }
-
-}  // namespace
 
 void MeasureSurfaceDistances(const TriangleMesh& julia, const TriangleMesh& shape, const FidelityOptions& o,
                              Fidelity& f) {
@@ -114,8 +108,10 @@ void MeasureSurfaceDistances(const TriangleMesh& julia, const TriangleMesh& shap
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
   const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                     (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  const std::vector<double> ab = UnsignedDistance(shape, AreaSamples(julia, o.surface_samples, o.seed));
-  const std::vector<double> ba = UnsignedDistance(julia, AreaSamples(shape, o.surface_samples, o.seed + 1));
+  const std::vector<Vec3> on_julia = SampleSurface(julia, o.surface_samples, o.seed),
+                          on_shape = SampleSurface(shape, o.surface_samples, o.seed + 1);
+  if (on_julia.empty() || on_shape.empty()) throw Error("fidelity: a mesh without area");
+  const std::vector<double> ab = UnsignedDistance(shape, on_julia), ba = UnsignedDistance(julia, on_shape);
   auto mean = [](const std::vector<double>& v) {
     double s = 0;
     for (double x : v) s += x;

@@ -51,6 +51,10 @@ struct Fidelity {
 // The lattice figures of `map` against the target grid `target` (both in the fractal frame).
 Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& options = {});
 
+// `count` points uniformly distributed by area on `mesh` (seeded; doubles from the top 53 bits of
+// std::mt19937_64, portable); empty when the mesh has no area.
+std::vector<Vec3> SampleSurface(const TriangleMesh& mesh, int count, std::uint64_t seed);
+
 // Chamfer and Hausdorff of `julia` against `shape` (same frame), filled into `f`.
 void MeasureSurfaceDistances(const TriangleMesh& julia, const TriangleMesh& shape, const FidelityOptions& options,
                              Fidelity& f);
