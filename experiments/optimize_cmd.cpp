@@ -14,7 +14,7 @@ void AddOptimizeCommand(CLI::App& app) {
   struct Args {
     std::string target, map_path, schedule = "25(VFRF)50(VFRF)97(VF)", out_dir, weights = WeightFieldName(OptimizeOptions{}.weights),
                 level_weights = "sample", evaluator = "loglinear", precision = "double", backend = "lbfgspp",
-                storage = "auto";
+                storage = "auto", level_start = LevelStartName(OptimizeOptions{}.level_start);
     double memory_budget_gb = 8.0;
     int target_resolution = 97, memory = 5, absolute_every = 10, checkpoint_every = 25;
     int max_v = 200, max_f = 2000, max_r = 2000;
@@ -50,6 +50,11 @@ void AddOptimizeCommand(CLI::App& app) {
       ->check(CLI::IsMember({"layer", "inverse", "balanced"}));
   c->add_option("--level-weights", a->level_weights, "sample or recompute")->capture_default_str()
       ->check(CLI::IsMember({"sample", "recompute"}));
+  c->add_option("--level-start", a->level_start,
+                "best: each level after the first starts from the map with the lowest absolute energy so far; "
+                "last: from the last pass's map (the paper, the reference code)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"best", "last"}));
   c->add_option("--target-resolution", a->target_resolution, "Grid of an analytic target")->capture_default_str();
   c->add_option("--alpha", a->alpha, "Sharpness of tanh")->capture_default_str();
   c->add_option("--memory", a->memory, "L-BFGS correction pairs")->capture_default_str();
@@ -84,6 +89,7 @@ void AddOptimizeCommand(CLI::App& app) {
     o.backend = a->backend;
     o.weights = ParseWeightField(a->weights);
     o.level_weights = a->level_weights == "sample" ? LevelWeights::kSampleFinest : LevelWeights::kRecompute;
+    o.level_start = ParseLevelStart(a->level_start);
     o.energy.alpha = a->alpha;
     o.memory = a->memory;
     o.loglinear.storage = ParseStorage(a->storage);

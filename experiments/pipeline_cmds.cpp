@@ -173,7 +173,14 @@ void AddModuleCommands(CLI::App& app) {
                 "monopole/kernel_fit.h); monopoles: the paper's potential fit with its charges as exponents")
       ->capture_default_str()
       ->check(CLI::IsMember({"log-kernel", "monopoles"}));
-  m->add_option("--roots", a->kernel.roots, "log-kernel: root positions (pairs on the surface normals)")->capture_default_str();
+  m->add_option("--roots", a->kernel.roots, "log-kernel: at least this many root positions (pairs on the surface normals)")
+      ->capture_default_str();
+  m->add_option("--max-roots", a->kernel.max_roots,
+                "log-kernel: at most this many roots (or --roots, if larger) where the spacing rule asks for more")
+      ->capture_default_str();
+  m->add_option("--root-spacing", a->kernel.spacing,
+                "log-kernel: largest distance between root pairs, in units of their offset (sets how many roots a shape gets)")
+      ->capture_default_str();
   m->add_option("--root-offset", a->kernel.offset_cells, "log-kernel: distance of the roots from the surface, in cells")->capture_default_str();
   m->add_option("--band", a->kernel.band_cells, "log-kernel: half-width of the band where L follows the distance, in cells")->capture_default_str();
   m->add_option("--band-amplitude", a->kernel.amplitude, "log-kernel: |L| at the band's edge")->capture_default_str();
@@ -237,7 +244,8 @@ void AddModuleCommands(CLI::App& app) {
       map = KernelFitMap(mesh.vertices, mesh.triangles, sdf, frame, a->kernel, &kfit);
       map.provenance = {{"made_by", "quijibo monopoles"}, {"initializer", "log-kernel"},
                         {"mesh", std::filesystem::path(a->mesh).filename().string()},
-                        {"resolution", a->resolution}, {"roots", a->kernel.roots},
+                        {"resolution", a->resolution}, {"roots", a->kernel.roots}, {"max_roots", a->kernel.max_roots},
+                        {"root_spacing", a->kernel.spacing},
                         {"offset_cells", a->kernel.offset_cells}, {"band_cells", a->kernel.band_cells},
                         {"band_amplitude", a->kernel.amplitude}, {"ridge", a->kernel.ridge},
                         {"origin_root", a->kernel.origin_root}, {"refine_rounds", a->kernel.refine_rounds},
@@ -293,7 +301,7 @@ void AddModuleCommands(CLI::App& app) {
       summary["log_kernel"] = {{"rows", kfit.rows}, {"band_rows", kfit.band_rows}, {"far_rows", kfit.far_rows},
                                {"active_set_iterations", kfit.iterations}, {"refine_rounds", kfit.refine_rounds}, {"top", kfit.top},
                                {"bottom", kfit.bottom}, {"exponent_sum", kfit.exponent_sum},
-                               {"rms_band", kfit.rms_band}, {"sign_agreement", kfit.sign_agreement}};
+                               {"spacing", kfit.spacing}, {"rms_band", kfit.rms_band}, {"sign_agreement", kfit.sign_agreement}};
       summary["seconds"] = {{"sdf", sdf_seconds}, {"fit", kfit.seconds}, {"png", png_seconds}};
     } else {
       summary.update(json{{"monopoles", fit.monopoles.size()}, {"positive", fit.positive_count()},

@@ -155,8 +155,8 @@ const std::vector<std::string> kTopKeys = {"name", "description", "method", "see
 void ReadOptimizer(Reader& rd, const std::string& p, const fs::path& base, bool named) {
   const JsonReader& r = rd.r();
   if (!r.at(p).is_object()) r.fail(p, "expected an object, found " + JsonReader::describe(r.at(p)));
-  r.allow_keys(p, {"name", "schedule", "backend", "evaluator", "precision", "weights", "level_weights", "alpha",
-                   "memory", "tolerance", "max_iterations", "checkpoint_every", "absolute_every", "storage",
+  r.allow_keys(p, {"name", "schedule", "backend", "evaluator", "precision", "weights", "level_weights", "level_start",
+                   "alpha", "memory", "tolerance", "max_iterations", "checkpoint_every", "absolute_every", "storage",
                    "memory_budget_gb"});
   if (named) {
     const std::string name = rd.Str(p + "/name", "");
@@ -172,6 +172,7 @@ void ReadOptimizer(Reader& rd, const std::string& p, const fs::path& base, bool 
                                  pr + "\"");
   rd.Str(p + "/weights", WeightFieldName(OptimizeOptions{}.weights), {"layer", "inverse", "balanced"});
   rd.Str(p + "/level_weights", "sample", {"sample", "recompute"});
+  rd.Str(p + "/level_start", LevelStartName(OptimizeOptions{}.level_start), {"best", "last"});
   rd.Str(p + "/storage", "auto", {"auto", "double", "float", "on-the-fly"});
   rd.Num(p + "/alpha", 10.0, 0.0, 1e6, true);
   rd.Int(p + "/memory", 5, 1, 100);
@@ -312,10 +313,12 @@ json ResolveExperiment(const std::string& path) {
       if (target_kind != "mesh")
         r.fail(ip + "/kind", "\"log-kernel\" needs a mesh target (\"target\": {\"mesh\": ...}); use \"random\" or \"map\"");
       if (r.has(ip))
-        r.allow_keys(ip, {"kind", "roots", "root_offset", "band", "band_amplitude", "ridge", "sampling_seed",
+        r.allow_keys(ip, {"kind", "roots", "max_roots", "root_spacing", "root_offset", "band", "band_amplitude", "ridge", "sampling_seed",
                           "origin_root", "refine_rounds", "png_size"});
       const KernelFitOptions ko;
       rd.Int(ip + "/roots", ko.roots, 8, 4000);
+      rd.Int(ip + "/max_roots", ko.max_roots, 8, 4000);
+      rd.Num(ip + "/root_spacing", ko.spacing, 1.0, 100.0);
       rd.Num(ip + "/root_offset", ko.offset_cells, 0.0, 50.0, true);
       rd.Num(ip + "/band", ko.band_cells, 0.0, 50.0, true);
       rd.Num(ip + "/band_amplitude", ko.amplitude, 0.0, 100.0, true);
@@ -700,6 +703,7 @@ std::string Runner::Optimize(const json& o, const std::string& initial_hash) {
                                    "--backend", o["backend"],
                                    "--weights", o["weights"],
                                    "--level-weights", o["level_weights"],
+                                   "--level-start", o["level_start"],
                                    "--storage", o["storage"],
                                    "--alpha=" + Num(o["alpha"]),
                                    "--memory", Int(o["memory"]),
@@ -779,6 +783,8 @@ void Runner::RunQuijibo() {
                                         "--target-box", t["box"], "--origin", t["origin"],
                                         "--initializer", "log-kernel",
                                         "--roots", Int(in["roots"]),
+                                        "--max-roots", Int(in["max_roots"]),
+                                        "--root-spacing=" + Num(in["root_spacing"]),
                                         "--root-offset=" + Num(in["root_offset"]),
                                         "--band=" + Num(in["band"]),
                                         "--band-amplitude=" + Num(in["band_amplitude"]),

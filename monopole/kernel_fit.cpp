@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <unordered_map>
+#include <utility>
 
 #include <Eigen/Dense>
 
@@ -13,6 +15,8 @@ namespace quijibo {
 
 std::string KernelFitOptions::validate() const {
   if (roots < 8 || roots > 4000) return "roots must be in [8, 4000]";
+  if (max_roots < 8 || max_roots > 4000) return "max roots must be in [8, 4000]";
+  if (!(spacing >= 1 && spacing <= 100)) return "root spacing must be in [1, 100] pair sizes";
   if (!(offset_cells > 0) || offset_cells > 50) return "offset must be in (0, 50] cells";
   if (!(band_cells > 0) || band_cells > 50) return "band must be in (0, 50] cells";
   if (!(amplitude > 0) || amplitude > 100) return "amplitude must be in (0, 100]";
@@ -49,6 +53,120 @@ std::vector<Vec3> SpherePoints(const Vec3& c, double radius, int count) {
   return p;
 }
 
+// A surface point p with one root `offset` inside and one outside along its normal, each offset
+// shortened until the root is still about as far from the surface as it was moved: past the
+// medial axis (the middle of a thin wall, a narrow gap) it would sit nearer the other side.
+struct RootPair {
+  Vec3 p;
+  Vec4 inside, outside;
+  double size = 0;  // the shorter of the two offsets: the width of the bump the pair can shape
+};
+
+// Sizes below a cell describe detail the target grid cannot show (at a sharp edge the offsets
+// shorten to almost nothing); they would crowd pairs onto the edges.
+constexpr double kMinSizeCells = 1.0;
+
+bool MakePair(const ScalarGrid& sdf, const Vec3& p, double offset, RootPair& out) {
+  Vec3 n = Gradient(sdf, p);
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(len > 1e-12)) return false;
+  for (double& c : n) c /= len;
+  out.p = p;
+  out.size = offset;
+  for (int side : {-1, 1}) {
+    double d = offset;
+    Vec3 q;
+    for (int k = 0; k < 12; ++k) {
+      q = {p[0] + side * d * n[0], p[1] + side * d * n[1], p[2] + side * d * n[2]};
+      if (side * sdf.sample(q) > 0.6 * d) break;
+      d *= 0.75;
+    }
+    (side < 0 ? out.inside : out.outside) = {q[0], q[1], q[2], 0.0};
+    out.size = std::min(out.size, d);
+  }
+  out.size = std::max(out.size, std::min(offset, kMinSizeCells * sdf.frame.spacing));
+  return true;
+}
+
+// Many blue-noise surface points with their pairs, in a seeded random order: the candidates
+// SpacePairs chooses from.
+std::vector<RootPair> CandidatePairs(const std::vector<Vec3>& vertices, const std::vector<std::array<int, 3>>& triangles,
+                                     const ScalarGrid& sdf, const KernelFitOptions& o) {
+  SamplingOptions so;
+  so.count = std::clamp(8 * std::max(o.roots, o.max_roots), 2000, 40000);
+  so.seed = o.seed;
+  const std::vector<Vec3> p = PoissonDiskSample(vertices, triangles, so);
+  std::vector<RootPair> pairs(p.size());
+  std::vector<char> ok(p.size());
+  const double offset = o.offset_cells * sdf.frame.spacing;
+#pragma omp parallel for schedule(static)
+  for (std::size_t k = 0; k < p.size(); ++k) ok[k] = MakePair(sdf, p[k], offset, pairs[k]);
+  std::vector<RootPair> kept;
+  for (std::size_t k = 0; k < p.size(); ++k)
+    if (ok[k]) kept.push_back(pairs[k]);
+  return kept;
+}
+
+// Greedy dart throwing in the candidates' order with a radius proportional to each pair's size:
+// r_k = r0 * size_k / size_max; two pairs conflict when nearer than the mean of their radii.
+std::vector<int> ThrowDarts(const std::vector<RootPair>& pairs, double r0, double size_max) {
+  std::unordered_map<std::int64_t, std::vector<int>> hash;
+  auto key = [&](std::int64_t i, std::int64_t j, std::int64_t k) { return (i * 73856093) ^ (j * 19349663) ^ (k * 83492791); };
+  std::vector<int> chosen;
+  for (int c = 0; c < int(pairs.size()); ++c) {
+    const Vec3& p = pairs[c].p;
+    const double rc = r0 * pairs[c].size / size_max;
+    const std::int64_t ci = std::int64_t(std::floor(p[0] / r0)), cj = std::int64_t(std::floor(p[1] / r0)),
+                       ck = std::int64_t(std::floor(p[2] / r0));
+    bool free = true;
+    for (std::int64_t i = ci - 1; i <= ci + 1 && free; ++i)
+      for (std::int64_t j = cj - 1; j <= cj + 1 && free; ++j)
+        for (std::int64_t k = ck - 1; k <= ck + 1 && free; ++k) {
+          auto it = hash.find(key(i, j, k));
+          if (it == hash.end()) continue;
+          for (int o : it->second) {
+            const Vec3& q = pairs[o].p;
+            const double r = 0.5 * (rc + r0 * pairs[o].size / size_max);
+            if ((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]) < r * r) {
+              free = false;
+              break;
+            }
+          }
+        }
+    if (!free) continue;
+    chosen.push_back(c);
+    hash[key(ci, cj, ck)].push_back(c);
+  }
+  return chosen;
+}
+
+// Chooses the root pairs: spaced at most `spacing` times their size apart (the sampling rule),
+// which sets their number, kept within [roots, max_roots] / 2 by scaling the spacing. Returns the
+// chosen candidates and the spacing ratio used.
+std::pair<std::vector<int>, double> SpacePairs(const std::vector<RootPair>& pairs, const KernelFitOptions& o, double h) {
+  const double size_max = o.offset_cells * h;
+  const int lo = o.roots / 2, hi = std::max(o.roots, o.max_roots) / 2;
+  double ratio = o.spacing;
+  std::vector<int> chosen = ThrowDarts(pairs, ratio * size_max, size_max);
+  const int n = int(chosen.size());
+  if (n >= lo && n <= hi) return {chosen, ratio};
+  // Bisect the ratio (the count falls as it grows) for the smallest count >= the bound, then
+  // drop the last-thrown extras.
+  const int target = std::clamp(n, lo, hi);
+  double small = ratio, large = ratio;
+  if (n > hi)
+    while (int(ThrowDarts(pairs, large * size_max, size_max).size()) > hi && large < 1e3) large *= 2;
+  else
+    while (int(ThrowDarts(pairs, small * size_max, size_max).size()) < lo && small > 1e-3) small /= 2;
+  for (int it = 0; it < 30; ++it) {
+    const double mid = std::sqrt(small * large);
+    (int(ThrowDarts(pairs, mid * size_max, size_max).size()) >= target ? small : large) = mid;
+  }
+  chosen = ThrowDarts(pairs, small * size_max, size_max);
+  if (int(chosen.size()) > target) chosen.resize(target);
+  return {chosen, small};
+}
+
 }  // namespace
 
 RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<std::array<int, 3>>& triangles,
@@ -59,32 +177,23 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
   const double h = sdf.frame.spacing;
   const double delta = o.band_cells * h, s = o.amplitude;
 
-  // Root positions: pairs along the normals of surface points.
+  // Root positions: pairs along the normals of surface points, spaced in proportion to their
+  // offset (PlacePairs).
   std::vector<Vec4> roots;
   std::vector<Vec3> points;  // the surface points that have roots
+  std::vector<RootPair> pairs = CandidatePairs(vertices, triangles, sdf, o);
+  const auto [chosen, spacing] = SpacePairs(pairs, o, h);
+  for (int k : chosen) {
+    points.push_back(pairs[k].p);
+    roots.push_back(pairs[k].inside), roots.push_back(pairs[k].outside);
+  }
   auto add_pair = [&](const Vec3& p) {
-    Vec3 n = Gradient(sdf, p);
-    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(len > 1e-12)) return;
-    for (double& c : n) c /= len;
+    RootPair rp;
+    if (!MakePair(sdf, p, o.offset_cells * h, rp)) return;
     points.push_back(p);
-    for (int side : {-1, 1}) {
-      // Shorten the offset until the root is still about as far from the surface as it was moved:
-      // past the medial axis (a thin finger, a narrow gap) it would sit nearer the other side.
-      double d = o.offset_cells * h;
-      Vec3 q;
-      for (int k = 0; k < 12; ++k) {
-        q = {p[0] + side * d * n[0], p[1] + side * d * n[1], p[2] + side * d * n[2]};
-        if (side * sdf.sample(q) > 0.6 * d) break;
-        d *= 0.75;
-      }
-      roots.push_back({q[0], q[1], q[2], 0.0});
-    }
+    roots.push_back(rp.inside), roots.push_back(rp.outside);
   };
-  SamplingOptions so;
-  so.count = o.roots / 2;
-  so.seed = o.seed;
-  for (const Vec3& p : PoissonDiskSample(vertices, triangles, so)) add_pair(p);
+  const int base_pairs = int(chosen.size());
   if (roots.empty()) throw Error("log-kernel fit: no surface normals (is the signed distance field flat?)");
 
   // Rows: the band at full resolution, a coarse lattice beyond it, and two far spheres.
@@ -168,9 +277,9 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
       Eigen::MatrixXd Nr = N.selfadjointView<Eigen::Lower>();
       const double mean_diag = Nr.diagonal().tail(R).mean();
       for (int i = 1; i < cols; ++i) Nr(i, i) += o.ridge * mean_diag;
-      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cols);
-      for (int r = 0; r < M; ++r)
-        if (active[r]) rhs.noalias() += (w[r] * (g[r] - fixed[r])) * A.row(r).transpose();
+      Eigen::VectorXd v(M);
+      for (int r = 0; r < M; ++r) v[r] = active[r] ? w[r] * (g[r] - fixed[r]) : 0.0;
+      const Eigen::VectorXd rhs = A.transpose() * v;
       e = Nr.ldlt().solve(rhs);
       if (!e.allFinite()) throw Error("log-kernel fit: the least-squares system is singular");
       L = A * e + fixed;
@@ -204,7 +313,7 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
     const std::size_t before = points.size();
     const double min_gap2 = std::pow(2 * o.offset_cells * h, 2);  // the pairs' own spacing
     for (int r : wrong) {
-      if (int(points.size() - before) >= so.count / 2) break;
+      if (int(points.size() - before) >= base_pairs / 2) break;
       const Vec3& x = rows[r].x;
       Vec3 n = Gradient(sdf, x);
       const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
@@ -247,6 +356,7 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
   }
   out.rows = M, out.band_rows = band_rows, out.far_rows = far_rows, out.iterations = iterations;
   out.refine_rounds = rounds;
+  out.spacing = spacing;
   out.rms_band = band_w > 0 ? std::sqrt(band_sq / band_w) : 0;
   out.sign_agreement = total > 0 ? agree / total : 0;
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -37,7 +37,13 @@
 namespace quijibo {
 
 struct KernelFitOptions {
-  int roots = 400;             // root positions (pairs: roots / 2 surface samples), in [8, 4000]
+  // Root pairs are spaced at most `spacing` times their size (the shorter of their two offsets)
+  // apart: a pair shapes L over about its size, so thin walls, where the offsets shorten, get
+  // denser pairs. That rule sets how many roots a shape gets, kept in [roots, max_roots]
+  // (roots = max_roots: exactly that many, spread by the same rule).
+  int roots = 400;             // at least this many root positions (pairs: roots / 2), in [8, 4000]
+  int max_roots = 400;         // at most max(roots, max_roots), in [8, 4000]
+  double spacing = 4.0;        // largest pair spacing / pair size, in [1, 100]
   double offset_cells = 2.0;   // distance of a root from the surface, in cells of the target grid
   double band_cells = 3.0;     // delta, the half-width of the linear band, in cells
   double amplitude = 0.3;      // s, |L| at the band's edge (tanh(alpha s) = tanh(3) with alpha 10)
@@ -66,6 +72,7 @@ struct KernelFitSummary {
   int rows = 0, band_rows = 0, far_rows = 0;
   int iterations = 0;          // active-set iterations done (all rounds)
   int refine_rounds = 0;       // rounds that added roots
+  double spacing = 0;          // the spacing ratio used (larger than asked when max_roots binds)
   int top = 0, bottom = 0;     // fitted roots by sign (without the zero roots)
   double exponent_sum = 0;     // sum e_i: > 0 keeps the set bounded
   double rms_band = 0;         // weighted RMS of L - g on the band rows

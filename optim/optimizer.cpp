@@ -33,6 +33,16 @@ std::string StopReasonName(StopReason r) {
   return "?";
 }
 
+OptimizeOptions::LevelStart ParseLevelStart(const std::string& name) {
+  if (name == "best") return OptimizeOptions::LevelStart::kBest;
+  if (name == "last") return OptimizeOptions::LevelStart::kLast;
+  throw Error("unknown level start \"" + name + "\" (expected best or last)");
+}
+
+std::string LevelStartName(OptimizeOptions::LevelStart s) {
+  return s == OptimizeOptions::LevelStart::kBest ? "best" : "last";
+}
+
 std::string OptimizeOptions::validate() const {
   if (auto why = schedule.validate(); !why.empty()) return why;
   if (evaluator != "loglinear" && evaluator != "cached") return "evaluator must be loglinear or cached";
@@ -95,6 +105,7 @@ json OptimizeSummary::ToJson(const OptimizeOptions& o) const {
           {"precision", PrecisionName(o.precision)}, {"backend", o.backend},
           {"weights", WeightFieldName(o.weights)},
           {"level_weights", o.level_weights == LevelWeights::kSampleFinest ? "sample" : "recompute"},
+          {"level_start", LevelStartName(o.level_start)},
           {"alpha", o.energy.alpha}, {"memory", o.memory}, {"complete", complete},
           {"seconds", seconds}, {"absolute_start", absolute_start}, {"absolute_end", absolute_end},
           {"best_pass", best_pass}, {"passes", passes}};
@@ -359,6 +370,12 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     if (!objective) objective = std::make_unique<CachedObjective<Scalar>>(map, grid, o.energy);
 
     const int first_pass = li == start_level ? start_pass : 0;
+    if (o.level_start == OptimizeOptions::LevelStart::kBest && li > 0 && first_pass == 0 &&
+        summary.best_pass + 1 != int(summary.passes.size())) {
+      x = best_x;
+      emit({{"type", "level_start"}, {"level", level.resolution}, {"level_index", li}, {"step", step},
+            {"from_pass", summary.best_pass}, {"absolute", best_absolute}});
+    }
     for (int pj = first_pass; pj < int(level.passes.size()); ++pj) {
       const PassSpec& spec = level.passes[pj];
       const bool resumed_mid_pass = li == start_level && pj == start_pass && start_iteration > 0;

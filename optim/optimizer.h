@@ -42,6 +42,11 @@ struct OptimizeOptions {
   LevelWeights level_weights = LevelWeights::kSampleFinest;
   EnergyOptions energy;
   LogLinearOptions loglinear;
+  // Where a level after the first starts: kBest, the map with the lowest absolute energy so far
+  // (a coarse level whose cells are wider than a thin wall can raise the absolute energy, and the
+  // finer level should not inherit that); kLast, the last pass's map (the paper and reference).
+  enum class LevelStart { kBest, kLast };
+  LevelStart level_start = LevelStart::kBest;
   int memory = 5;              // L-BFGS correction pairs (reference: 5)
   int absolute_every = 10;     // iterations between absolute-energy log lines
   int checkpoint_every = 25;   // iterations between checkpoints (and L-BFGS memory restarts)
@@ -81,6 +86,9 @@ struct OptimizeSummary {
 // the target `sdf`; `map` holds the result (the best map, see above) on return. Throws
 // quijibo::Error on bad input. When a
 // SIGINT/SIGTERM arrives, writes a checkpoint and returns with complete = false.
+OptimizeOptions::LevelStart ParseLevelStart(const std::string& name);  // best|last
+std::string LevelStartName(OptimizeOptions::LevelStart s);
+
 OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options);
 
 }  // namespace quijibo

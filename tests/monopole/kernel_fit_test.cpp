@@ -120,6 +120,75 @@ TEST(KernelFit, CheckStartDetectsAnInvertedMap) {
   EXPECT_LT(c.iou, 0.2);
 }
 
+// A sphere of radius 0.7 at (-0.9, 0, 0) and a plate 0.3 thick at x = 0.9 (3 cells of the grid),
+// with their exact signed distance.
+TwoSpheres MakeSphereAndPlate() {
+  TwoSpheres t;
+  const auto m = testing::MakeIcosphere(3, {-0.9, 0, 0}, 0.7);
+  t.vertices = m.vertices;
+  t.triangles = m.triangles;
+  const Vec3 c{0.9, 0, 0}, e{0.15, 0.6, 0.6};  // the plate's centre and half extents
+  const int base = int(t.vertices.size());
+  for (int k = 0; k < 8; ++k)
+    t.vertices.push_back({c[0] + (k & 1 ? e[0] : -e[0]), c[1] + (k & 2 ? e[1] : -e[1]), c[2] + (k & 4 ? e[2] : -e[2])});
+  for (auto [a, b, cc, d] : {std::array{0, 2, 6, 4}, std::array{1, 5, 7, 3}, std::array{0, 4, 5, 1},
+                             std::array{2, 3, 7, 6}, std::array{0, 1, 3, 2}, std::array{4, 6, 7, 5}}) {
+    t.triangles.push_back({base + a, base + b, base + cc});
+    t.triangles.push_back({base + a, base + cc, base + d});
+  }
+  t.sdf.frame = GridFrame::Cube(40, {0, 0, 0}, 4.0);
+  t.sdf.values.resize(std::size_t(t.sdf.frame.cell_count()));
+  for (std::int64_t k = 0; k < t.sdf.frame.cell_count(); ++k) {
+    const Vec3 p = t.sdf.frame.cell_center(k);
+    const double sphere = std::sqrt((p[0] + 0.9) * (p[0] + 0.9) + p[1] * p[1] + p[2] * p[2]) - 0.7;
+    double q[3], outside = 0, inside = -1e9;
+    for (int a = 0; a < 3; ++a) {
+      q[a] = std::abs(p[a] - c[a]) - e[a];
+      outside += std::max(q[a], 0.0) * std::max(q[a], 0.0);
+      inside = std::max(inside, q[a]);
+    }
+    const double plate = std::sqrt(outside) + std::min(inside, 0.0);
+    t.sdf.values[std::size_t(k)] = std::min(sphere, plate);
+  }
+  return t;
+}
+
+TEST(KernelFit, ThinPartsGetDenserRootPairsAndTheSpacingRuleSetsTheCount) {
+  const TwoSpheres t = MakeSphereAndPlate();
+  const double sphere_area = 4 * M_PI * 0.7 * 0.7, plate_area = 2 * (4 * 0.15 * 0.6 + 4 * 0.15 * 0.6 + 4 * 0.6 * 0.6);
+  KernelFitOptions o;
+  o.offset_cells = 4;  // the plate, 3 cells thick, shortens its pairs' offsets below 1.5 cells
+  o.origin_root = false;
+  o.roots = o.max_roots = 200;
+  const RationalMap m = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
+  EXPECT_EQ(m.root_count(), 200);
+  int near_plate = 0;
+  for (const auto* roots : {&m.top_roots, &m.bottom_roots})
+    for (const Vec4& r : *roots) near_plate += r[0] > 0.3;
+  const double plate_density = near_plate / plate_area, sphere_density = (200 - near_plate) / sphere_area;
+  EXPECT_GT(plate_density, 3 * sphere_density);  // uniform sampling would give 1
+
+  // The rule sets the count: halving the spacing (in units of the 0.4 offset) asks for about four
+  // times the pairs.
+  o.roots = 16;
+  o.max_roots = 1000;
+  o.spacing = 2;
+  KernelFitSummary wide, narrow;
+  const RationalMap a = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &wide);
+  o.spacing = 1;
+  const RationalMap b = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &narrow);
+  EXPECT_EQ(wide.spacing, 2);
+  EXPECT_EQ(narrow.spacing, 1);
+  EXPECT_GT(b.root_count(), 2.5 * a.root_count());
+  EXPECT_LT(b.root_count(), 5.5 * a.root_count());
+  // And the bound binds: the spacing grows until the count fits.
+  o.max_roots = b.root_count() / 4 * 2;  // even: pairs
+  KernelFitSummary capped;
+  const RationalMap c = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &capped);
+  EXPECT_EQ(c.root_count(), o.max_roots);
+  EXPECT_GT(capped.spacing, 1.2);
+}
+
 TEST(KernelFit, RejectsBadOptions) {
   const TwoSpheres t = MakeTwoSpheres(0.7, 0.5);
   KernelFitOptions o;
@@ -127,6 +196,9 @@ TEST(KernelFit, RejectsBadOptions) {
   EXPECT_THROW(KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o), Error);
   o = {};
   o.band_cells = -1;
+  EXPECT_THROW(KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o), Error);
+  o = {};
+  o.spacing = 0.5;
   EXPECT_THROW(KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o), Error);
 }
 

@@ -284,6 +284,43 @@ TEST(OptimizerTest, TheResultIsTheBestMapOverAllPasses) {
   std::filesystem::remove_all(o.out_dir);
 }
 
+// A level after the first starts from the best map so far (LevelStart::kBest): here a pass on a
+// 5^3 grid, far too coarse for the torus, raises the absolute energy, and the following level-20
+// pass starts where the level-20 F pass ended; with kLast it inherits the coarse pass's map.
+TEST(OptimizerTest, ALevelStartsFromTheBestMapSoFar) {
+  OptimizeOptions o;
+  o.weights = WeightField::kLayer;
+  o.schedule = Schedule::Parse("20(VF)5(F)20(V)");
+  for (auto& l : o.schedule.levels)
+    for (auto& p : l.passes) p.max_iterations = 40;
+  for (auto start : {OptimizeOptions::LevelStart::kBest, OptimizeOptions::LevelStart::kLast}) {
+    SmallRun run;
+    o.level_start = start;
+    o.out_dir = TempDir("level_start");
+    const OptimizeSummary s = Optimize(run.sdf, run.map, o);
+    ASSERT_TRUE(s.complete);
+    ASSERT_EQ(s.passes.size(), 4u);
+    ASSERT_GT(s.passes[2].absolute_end, s.passes[1].absolute_end);  // the coarse pass made it worse
+    int level_start_lines = 0;
+    std::ifstream log(o.out_dir + "/log.jsonl");
+    for (std::string line; std::getline(log, line);) {
+      const auto j = nlohmann::json::parse(line);
+      if (j["type"] != "level_start") continue;
+      ++level_start_lines;
+      EXPECT_EQ(j["level_index"], 2);
+      EXPECT_EQ(j["from_pass"], 1);
+    }
+    if (start == OptimizeOptions::LevelStart::kBest) {
+      EXPECT_EQ(level_start_lines, 1);
+      EXPECT_NEAR(s.passes[3].energy_start, s.passes[1].energy_end, 1e-12);
+    } else {
+      EXPECT_EQ(level_start_lines, 0);
+      EXPECT_GT(std::abs(s.passes[3].energy_start - s.passes[1].energy_end), 1e-6);
+    }
+    std::filesystem::remove_all(o.out_dir);
+  }
+}
+
 TEST(OptimizerTest, RunsEndToEndInLongDoubleWithTheCachedEvaluator) {
   SmallRun run;
   OptimizeOptions o;
