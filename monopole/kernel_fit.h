@@ -42,8 +42,8 @@ struct KernelFitOptions {
   // denser pairs. That rule sets how many roots a shape gets, kept in [roots, max_roots]
   // (roots = max_roots: exactly that many, spread by the same rule).
   int roots = 400;             // at least this many root positions (pairs: roots / 2), in [8, 4000]
-  int max_roots = 400;         // at most max(roots, max_roots), in [8, 4000]
-  double spacing = 4.0;        // largest pair spacing / pair size, in [1, 100]
+  int max_roots = 1000;        // at most max(roots, max_roots), in [8, 4000]
+  double spacing = 2.5;        // largest pair spacing / pair size, in [1, 100]
   double offset_cells = 2.0;   // distance of a root from the surface, in cells of the target grid
   double band_cells = 3.0;     // delta, the half-width of the linear band, in cells
   double amplitude = 0.3;      // s, |L| at the band's edge (tanh(alpha s) = tanh(3) with alpha 10)
