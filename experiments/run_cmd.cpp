@@ -22,6 +22,7 @@
 #include <sstream>
 
 #include "experiments/cli.h"
+#include "experiments/modulus_cmds.h"
 #include "experiments/plot.h"
 #include "mesh/sdf_command.h"
 #include "monopole/fit_pipeline.h"
@@ -414,7 +415,7 @@ json ResolveExperiment(const std::string& path) {
     const std::string p = "/modulus";
     if (r.has(p)) {
       if (!r.at(p).is_object()) r.fail(p, "expected an object, found " + JsonReader::describe(r.at(p)));
-      r.allow_keys(p, {"alpha", "beta", "offset", "sdf_resolution", "versor", "output"});
+      r.allow_keys(p, {"alpha", "beta", "offset", "params", "sdf_resolution", "versor", "output"});
     }
     rd.Num(p + "/alpha", 30.0, 0.0, 1e9, true);
     rd.Num(p + "/beta", 0.0, -1e6, 1e6);
@@ -422,7 +423,11 @@ json ResolveExperiment(const std::string& path) {
       if (r.array_size(p + "/offset") != 3) r.fail(p + "/offset", "expected 3 numbers [ox, oy, oz]");
       for (int i = 0; i < 3; ++i) rd.Num(p + "/offset/" + std::to_string(i), 0, -1e6, 1e6);
     }
-    rd.Int(p + "/sdf_resolution", 100, 8, 2048);
+    const int sdf_resolution = int(rd.Int(p + "/sdf_resolution", 100, 8, 2048));
+    if (r.has(p + "/params")) {  // spatially varying alpha/beta (--params), checked here
+      ShapeModulusOptions so;
+      ReadModulusParams(rd.Path(p + "/params", base), so, sdf_resolution);
+    }
     const std::string vp = p + "/versor";
     if (r.has(vp)) r.allow_keys(vp, {"poly", "roots", "min_power", "max_power", "real_powers", "seed"});
     if (r.has(vp + "/poly")) {
@@ -455,6 +460,14 @@ json ResolveExperiment(const std::string& path) {
             const std::string f = Resolve(base, spec[k].get<std::string>());
             if (fs::exists(f)) spec[k] = f;
           }
+        // SDF masks' files, wherever they are (portal masks, alpha/beta regions).
+        std::function<void(json&)> masks = [&](json& j) {
+          if (j.is_object() && j.value("type", "") == "sdf" && j.contains("file") && j["file"].is_string())
+            j["file"] = Resolve(base, j["file"].get<std::string>());
+          if (j.is_structured())
+            for (auto& x : j) masks(x);
+        };
+        masks(spec);
         out["portal"]["spec"] = spec;
       } else {
         r.fail(p + "/spec", "expected a file path or an object, found " + JsonReader::describe(r.at(p + "/spec")));
@@ -956,6 +969,7 @@ void Runner::RunModulus() {
   if (kind == "analytic") spec = t["analytic"];
   else spec = t[kind], files.push_back(spec);
   if (m["versor"].contains("poly")) files.push_back(m["versor"]["poly"]);
+  if (m.contains("params")) files.push_back(m["params"]);
   const std::string ext = m["output"]["format"];
   const std::string hash = Stage("modulus", "modulus", {{"target", t}, {"modulus", m}}, files, {}, [&](const std::string& dir) {
     std::vector<std::string> a = {"modulus", spec, "--alpha=" + Num(m["alpha"]), "--beta=" + Num(m["beta"]),
@@ -964,6 +978,7 @@ void Runner::RunModulus() {
       a.push_back("--offset");
       for (const auto& x : m["offset"]) a.push_back(Num(x));
     }
+    if (m.contains("params")) a.insert(a.end(), {"--params", m["params"]});
     const json& v = m["versor"];
     if (v.contains("poly")) {
       a.insert(a.end(), {"--poly", v["poly"]});
