@@ -66,7 +66,9 @@ std::string Mask::validate() const {
     }
     case Type::kSdf:
       if (!sdf) return "sdf mask has no grid";
-      if (!(sdf_scale > 0)) return "sdf scale must be > 0";
+      if (!(sdf_scale > 0) || !std::isfinite(sdf_scale)) return "sdf scale must be > 0";
+      for (double c : center)
+        if (!std::isfinite(c)) return "sdf center must be finite";
       break;
   }
   return {};
@@ -108,10 +110,10 @@ Mask MaskFromJson(const JsonReader& r, const std::string& p, const std::string& 
     m.sdf_path = r.string(p + "/file");
     std::filesystem::path path(m.sdf_path);
     if (path.is_relative() && !base_dir.empty()) path = std::filesystem::path(base_dir) / path;
-    if (load) {
-      m.sdf = load(path.string());
-    } else {
-      m.sdf = std::make_shared<ScalarGrid>(ReadGrid(path.string()));
+    try {
+      m.sdf = load ? load(path.string()) : std::make_shared<ScalarGrid>(ReadGrid(path.string()));
+    } catch (const Error& e) {
+      r.fail(p + "/file", e.what());
     }
     m.sdf_scale = r.number_or(p + "/scale", 1.0);
     if (r.has(p + "/center")) m.center = ReadVec3(r, p + "/center");

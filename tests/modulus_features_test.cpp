@@ -437,5 +437,26 @@ TEST(SdfMaskCli, MeshMaskLinesUpWithTheTarget) {
   std::filesystem::remove_all(dir);
 }
 
+// An experiment's "params" file is read and checked by `quijibo run --check`: a wrong key in a
+// region's mask fails with the params file and the JSON pointer, before anything runs.
+TEST(ModulusExperiment, ParamsAreCheckedUpFront) {
+  const auto dir = std::filesystem::temp_directory_path() / "quijibo_modulus_params_check";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string exp = (dir / "e.json").string(), params = (dir / "p.json").string();
+  std::ofstream(exp) << R"({"method": "modulus", "target": {"analytic": "disc"},
+    "modulus": {"params": "p.json", "output": {"format": "png", "png_size": 32}}})";
+  std::ofstream(params) << R"({"alpha": {"value": 30, "regions": [{"mask": {"type": "sphere", "center": [0, 0], "radius": 0.1}, "value": 5, "feather": 0.1}]}})";
+  auto r = RunQuijibo("run " + exp + " --check");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(json::parse(r.out)["modulus"]["params"], params);
+  std::ofstream(params) << R"({"alpha": {"value": 30, "regions": [{"mask": {"type": "sphere", "centre": [0, 0], "radius": 0.1}, "value": 5, "feather": 0.1}]}})";
+  r = RunQuijibo("run " + exp + " --check");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("p.json"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("/alpha/regions/0/mask"), std::string::npos) << r.out;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace quijibo
