@@ -460,10 +460,13 @@ json ResolveExperiment(const std::string& path) {
             const std::string f = Resolve(base, spec[k].get<std::string>());
             if (fs::exists(f)) spec[k] = f;
           }
-        // SDF masks' files, wherever they are (portal masks, alpha/beta regions).
+        // SDF masks' files, wherever they are (portal masks, alpha/beta regions), and the versor
+        // polynomial.
         std::function<void(json&)> masks = [&](json& j) {
           if (j.is_object() && j.value("type", "") == "sdf" && j.contains("file") && j["file"].is_string())
             j["file"] = Resolve(base, j["file"].get<std::string>());
+          if (j.is_object() && j.contains("polynomial") && j["polynomial"].is_string())
+            j["polynomial"] = Resolve(base, j["polynomial"].get<std::string>());
           if (j.is_structured())
             for (auto& x : j) masks(x);
         };
@@ -578,6 +581,21 @@ std::string FileBytesHash(const std::string& path) {
   Fnv1a h;
   h.add(ReadFile(path));
   return h.hex();
+}
+
+// The files a params file or portal spec reads besides itself (target or map, SDF masks' files, a
+// versor polynomial), resolved against `dir`: they join the stage's hash, so editing one reruns it.
+void ReferencedFiles(const json& j, const fs::path& dir, std::vector<std::string>& out) {
+  if (j.is_object()) {
+    if (j.value("type", "") == "sdf" && j.contains("file") && j["file"].is_string()) out.push_back(Resolve(dir, j["file"]));
+    if (j.contains("polynomial") && j["polynomial"].is_string()) out.push_back(Resolve(dir, j["polynomial"]));
+    for (const char* k : {"target", "map"}) {
+      std::error_code ec;
+      if (j.contains(k) && j[k].is_string() && fs::is_regular_file(Resolve(dir, j[k]), ec)) out.push_back(Resolve(dir, j[k]));
+    }
+  }
+  if (j.is_structured())
+    for (const auto& x : j) ReferencedFiles(x, dir, out);
 }
 
 struct StageRecord {
@@ -969,7 +987,11 @@ void Runner::RunModulus() {
   if (kind == "analytic") spec = t["analytic"];
   else spec = t[kind], files.push_back(spec);
   if (m["versor"].contains("poly")) files.push_back(m["versor"]["poly"]);
-  if (m.contains("params")) files.push_back(m["params"]);
+  if (m.contains("params")) {
+    files.push_back(m["params"]);
+    const std::string params = m["params"];
+    ReferencedFiles(ParseJson(ReadFile(params), params), fs::path(params).parent_path(), files);
+  }
   const std::string ext = m["output"]["format"];
   const std::string hash = Stage("modulus", "modulus", {{"target", t}, {"modulus", m}}, files, {}, [&](const std::string& dir) {
     std::vector<std::string> a = {"modulus", spec, "--alpha=" + Num(m["alpha"]), "--beta=" + Num(m["beta"]),
@@ -1005,7 +1027,13 @@ void Runner::RunPortal() {
   const bool render = exp_["pictures"]["enabled"].get<bool>() && p["output"]["format"] == "ply";
   total_ = 1 + (render ? 1 : 0);
   std::vector<std::string> files;
-  if (p.contains("spec") && p["spec"].is_string()) files.push_back(p["spec"]);
+  if (p.contains("spec") && p["spec"].is_string()) {
+    const std::string spec = p["spec"];
+    files.push_back(spec);
+    ReferencedFiles(ParseJson(ReadFile(spec), spec), fs::path(spec).parent_path(), files);
+  } else if (p.contains("spec")) {
+    ReferencedFiles(p["spec"], fs::path(exp_["experiment"].get<std::string>()).parent_path(), files);
+  }
   const std::string ext = p["output"]["format"];
   const std::string hash = Stage("portal", "portal", p, files, {}, [&](const std::string& dir) {
     std::vector<std::string> a = {"portal"};
