@@ -9,11 +9,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <random>
 #include <sstream>
 #include <unordered_map>
 
 #include "experiments/cli.h"
+#include "experiments/modulus_cmds.h"
 #include "mesh/julia_field.h"
 #include "mesh/fidelity.h"
 #include "mesh/marching_cubes.h"
@@ -67,6 +69,30 @@ class Outputs {
   std::vector<std::string> written_;
 };
 
+// A mesh in the unit frame (bounding box centred at the origin, longest side 100/110: the authors'
+// set-up) and its signed distance on the cube [-0.5, 0.5]^3 at `sdf_resolution` cells.
+std::shared_ptr<ScalarGrid> UnitFrameMeshSdf(const std::string& path, int sdf_resolution, TriangleMesh* unit_mesh,
+                                             double* scale, Vec3* center) {
+  MeshReadReport rep;
+  TriangleMesh mesh = ReadMesh(path, &rep);
+  const BoundingBox bb = ComputeBoundingBox(mesh);
+  double longest = 0;
+  for (int a = 0; a < 3; ++a) longest = std::max(longest, bb.max[a] - bb.min[a]);
+  if (!(longest > 0)) throw Error(path + ": the mesh's bounding box is a point");
+  const double s = kUnitFrameLongestSide / longest;
+  Vec3 c;
+  for (int a = 0; a < 3; ++a) c[a] = 0.5 * (bb.min[a] + bb.max[a]);
+  for (Vec3& v : mesh.vertices)
+    for (int a = 0; a < 3; ++a) v[a] = s * (v[a] - c[a]);
+  SdfOptions so;
+  so.name = path;
+  auto grid = std::make_shared<ScalarGrid>(SignedDistance(mesh, GridFrame::Cube(sdf_resolution, {0, 0, 0}, 1.0), so));
+  if (unit_mesh) *unit_mesh = std::move(mesh);
+  if (scale) *scale = s;
+  if (center) *center = c;
+  return grid;
+}
+
 // What a loaded target is and how it maps to the unit frame.
 struct LoadedTarget {
   ModulusTarget target;
@@ -82,22 +108,10 @@ struct LoadedTarget {
 LoadedTarget LoadModulusTarget(const std::string& spec, int sdf_resolution) {
   LoadedTarget t;
   if (IsMeshFile(spec)) {
-    MeshReadReport rep;
-    TriangleMesh mesh = ReadMesh(spec, &rep);
-    const BoundingBox bb = ComputeBoundingBox(mesh);
-    double longest = 0;
-    for (int a = 0; a < 3; ++a) longest = std::max(longest, bb.max[a] - bb.min[a]);
-    if (!(longest > 0)) throw Error(spec + ": the mesh's bounding box is a point");
-    const double s = kUnitFrameLongestSide / longest;
-    Vec3 c;
-    for (int a = 0; a < 3; ++a) c[a] = 0.5 * (bb.min[a] + bb.max[a]);
-    for (Vec3& v : mesh.vertices)
-      for (int a = 0; a < 3; ++a) v[a] = s * (v[a] - c[a]);
-    SdfOptions so;
-    so.name = spec;
-    t.grid = std::make_shared<ScalarGrid>(SignedDistance(mesh, GridFrame::Cube(sdf_resolution, {0, 0, 0}, 1.0), so));
+    double s = 1;
+    Vec3 c{0, 0, 0};
+    t.grid = UnitFrameMeshSdf(spec, sdf_resolution, &t.mesh_unit, &s, &c);
     t.target = ModulusTargetFromUnitGrid(t.grid);
-    t.mesh_unit = std::move(mesh);
     t.info = {{"kind", "mesh"},
               {"file", spec},
               {"unit_frame", {{"scale", s}, {"mesh_center", {c[0], c[1], c[2]}}}},
@@ -281,18 +295,6 @@ void WriteProduct(const Product& p, const std::string& path, Outputs& outs) {
   outs.Add(path);
 }
 
-// alpha, beta (numbers or fields) and the origin offset from a small JSON file.
-void ReadParams(const std::string& path, ShapeModulusOptions& so) {
-  const json doc = ParseJson(ReadFile(path), path);
-  JsonReader r(doc, path);
-  if (!doc.is_object()) r.fail("", "expected a JSON object");
-  r.allow_keys("", {"alpha", "beta", "origin_offset"});
-  const std::string dir = std::filesystem::path(path).parent_path().string();
-  if (r.has("/alpha")) so.alpha = ParameterFieldFromJson(r, "/alpha", dir);
-  if (r.has("/beta")) so.beta = ParameterFieldFromJson(r, "/beta", dir);
-  if (r.has("/origin_offset")) so.origin_offset = ReadVec3(r, "/origin_offset");
-}
-
 // ---------------------------------------------------------------- portal specs
 
 struct PortalScene {
@@ -319,6 +321,7 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
   };
   PortalScene s;
   s.spec = doc;
+  const MaskGridLoader load_mask = MakeMaskGridLoader(sdf_resolution);
   std::shared_ptr<const QuaternionMap> base;
   std::function<double(const Quat&)> base_set;
   if (r.has("/map")) {
@@ -335,8 +338,8 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
     s.target = lt.target;
     if (r.has("/dimension")) s.target.dimension = int(r.integer("/dimension"));
     ShapeModulusOptions so;
-    if (r.has("/alpha")) so.alpha = ParameterFieldFromJson(r, "/alpha", dir);
-    if (r.has("/beta")) so.beta = ParameterFieldFromJson(r, "/beta", dir);
+    if (r.has("/alpha")) so.alpha = ParameterFieldFromJson(r, "/alpha", dir, load_mask);
+    if (r.has("/beta")) so.beta = ParameterFieldFromJson(r, "/beta", dir, load_mask);
     if (r.has("/origin_offset")) so.origin_offset = ReadVec3(r, "/origin_offset");
     if (auto why = so.validate(); !why.empty()) r.fail("", why);
     Versor v;
@@ -388,7 +391,7 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
   s.two_d = s.target.dimension == 2;
   std::vector<Portal> portals;
   const std::size_t n = r.has("/portals") ? r.array_size("/portals") : 0;
-  for (std::size_t i = 0; i < n; ++i) portals.push_back(PortalFromJson(r, "/portals/" + std::to_string(i), dir));
+  for (std::size_t i = 0; i < n; ++i) portals.push_back(PortalFromJson(r, "/portals/" + std::to_string(i), dir, load_mask));
   s.map = std::make_shared<PortalMap>(base, std::move(portals), base_set);
   s.defaults.iterations = int(r.number_or("/iterations", 20));
   s.defaults.escape = r.number_or("/escape_radius", 20.0);
@@ -505,6 +508,29 @@ Image SliceImage(const std::function<double(const Vec3&)>& field, const ScalarGr
 
 }  // namespace
 
+MaskGridLoader MakeMaskGridLoader(int sdf_resolution) {
+  auto cache = std::make_shared<std::map<std::string, std::shared_ptr<const ScalarGrid>>>();
+  return [cache, sdf_resolution](const std::string& path) -> std::shared_ptr<const ScalarGrid> {
+    if (!IsMeshFile(path)) return std::make_shared<ScalarGrid>(ReadGrid(path));
+    auto it = cache->find(path);
+    if (it == cache->end()) it = cache->emplace(path, UnitFrameMeshSdf(path, sdf_resolution, nullptr, nullptr, nullptr)).first;
+    return it->second;
+  };
+}
+
+void ReadModulusParams(const std::string& path, ShapeModulusOptions& so, int sdf_resolution) {
+  const json doc = ParseJson(ReadFile(path), path);
+  JsonReader r(doc, path);
+  if (!doc.is_object()) r.fail("", "expected a JSON object");
+  r.allow_keys("", {"alpha", "beta", "origin_offset"});
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  const MaskGridLoader load = MakeMaskGridLoader(sdf_resolution);
+  if (r.has("/alpha")) so.alpha = ParameterFieldFromJson(r, "/alpha", dir, load);
+  if (r.has("/beta")) so.beta = ParameterFieldFromJson(r, "/beta", dir, load);
+  if (r.has("/origin_offset")) so.origin_offset = ReadVec3(r, "/origin_offset");
+  if (auto why = so.validate(); !why.empty()) r.fail("", why);
+}
+
 void AddModulusCommands(CLI::App& app) {
   // ------------------------------------------------------------------ modulus
   {
@@ -542,7 +568,7 @@ void AddModulusCommands(CLI::App& app) {
       so.alpha = a->alpha;
       so.beta = a->beta;
       if (!a->offset.empty()) so.origin_offset = {a->offset[0], a->offset[1], a->offset[2]};
-      if (!a->params.empty()) ReadParams(a->params, so);
+      if (!a->params.empty()) ReadModulusParams(a->params, so, a->sdf_resolution);
       const Versor v = MakeVersor(a->versor, lt.target);
       auto map = std::make_shared<ShapeModulusMap>(lt.target, v, so);
       Product p = Produce(map, a->out, lt.target, two_d);
@@ -677,7 +703,7 @@ void AddModulusCommands(CLI::App& app) {
       ShapeModulusOptions so;
       so.alpha = a->alpha;
       so.beta = a->beta;
-      if (!a->params.empty()) ReadParams(a->params, so);
+      if (!a->params.empty()) ReadModulusParams(a->params, so, 100);
       auto sm = std::make_shared<ShapeModulusMap>(target, v, so);
       const double sm_fit = Now() - t0;
       auto qj = std::make_shared<RationalQuaternionMap>(rmap);

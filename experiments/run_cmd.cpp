@@ -22,6 +22,7 @@
 #include <sstream>
 
 #include "experiments/cli.h"
+#include "experiments/modulus_cmds.h"
 #include "experiments/plot.h"
 #include "mesh/sdf_command.h"
 #include "monopole/fit_pipeline.h"
@@ -417,7 +418,7 @@ json ResolveExperiment(const std::string& path) {
     const std::string p = "/modulus";
     if (r.has(p)) {
       if (!r.at(p).is_object()) r.fail(p, "expected an object, found " + JsonReader::describe(r.at(p)));
-      r.allow_keys(p, {"alpha", "beta", "offset", "sdf_resolution", "versor", "output"});
+      r.allow_keys(p, {"alpha", "beta", "offset", "params", "sdf_resolution", "versor", "output"});
     }
     rd.Num(p + "/alpha", 30.0, 0.0, 1e9, true);
     rd.Num(p + "/beta", 0.0, -1e6, 1e6);
@@ -425,7 +426,11 @@ json ResolveExperiment(const std::string& path) {
       if (r.array_size(p + "/offset") != 3) r.fail(p + "/offset", "expected 3 numbers [ox, oy, oz]");
       for (int i = 0; i < 3; ++i) rd.Num(p + "/offset/" + std::to_string(i), 0, -1e6, 1e6);
     }
-    rd.Int(p + "/sdf_resolution", 100, 8, 2048);
+    const int sdf_resolution = int(rd.Int(p + "/sdf_resolution", 100, 8, 2048));
+    if (r.has(p + "/params")) {  // spatially varying alpha/beta (--params), checked here
+      ShapeModulusOptions so;
+      ReadModulusParams(rd.Path(p + "/params", base), so, sdf_resolution);
+    }
     const std::string vp = p + "/versor";
     if (r.has(vp)) r.allow_keys(vp, {"poly", "roots", "min_power", "max_power", "real_powers", "seed"});
     if (r.has(vp + "/poly")) {
@@ -458,6 +463,17 @@ json ResolveExperiment(const std::string& path) {
             const std::string f = Resolve(base, spec[k].get<std::string>());
             if (fs::exists(f)) spec[k] = f;
           }
+        // SDF masks' files, wherever they are (portal masks, alpha/beta regions), and the versor
+        // polynomial.
+        std::function<void(json&)> masks = [&](json& j) {
+          if (j.is_object() && j.value("type", "") == "sdf" && j.contains("file") && j["file"].is_string())
+            j["file"] = Resolve(base, j["file"].get<std::string>());
+          if (j.is_object() && j.contains("polynomial") && j["polynomial"].is_string())
+            j["polynomial"] = Resolve(base, j["polynomial"].get<std::string>());
+          if (j.is_structured())
+            for (auto& x : j) masks(x);
+        };
+        masks(spec);
         out["portal"]["spec"] = spec;
       } else {
         r.fail(p + "/spec", "expected a file path or an object, found " + JsonReader::describe(r.at(p + "/spec")));
@@ -568,6 +584,21 @@ std::string FileBytesHash(const std::string& path) {
   Fnv1a h;
   h.add(ReadFile(path));
   return h.hex();
+}
+
+// The files a params file or portal spec reads besides itself (target or map, SDF masks' files, a
+// versor polynomial), resolved against `dir`: they join the stage's hash, so editing one reruns it.
+void ReferencedFiles(const json& j, const fs::path& dir, std::vector<std::string>& out) {
+  if (j.is_object()) {
+    if (j.value("type", "") == "sdf" && j.contains("file") && j["file"].is_string()) out.push_back(Resolve(dir, j["file"]));
+    if (j.contains("polynomial") && j["polynomial"].is_string()) out.push_back(Resolve(dir, j["polynomial"]));
+    for (const char* k : {"target", "map"}) {
+      std::error_code ec;
+      if (j.contains(k) && j[k].is_string() && fs::is_regular_file(Resolve(dir, j[k]), ec)) out.push_back(Resolve(dir, j[k]));
+    }
+  }
+  if (j.is_structured())
+    for (const auto& x : j) ReferencedFiles(x, dir, out);
 }
 
 struct StageRecord {
@@ -962,6 +993,11 @@ void Runner::RunModulus() {
   if (kind == "analytic") spec = t["analytic"];
   else spec = t[kind], files.push_back(spec);
   if (m["versor"].contains("poly")) files.push_back(m["versor"]["poly"]);
+  if (m.contains("params")) {
+    files.push_back(m["params"]);
+    const std::string params = m["params"];
+    ReferencedFiles(ParseJson(ReadFile(params), params), fs::path(params).parent_path(), files);
+  }
   const std::string ext = m["output"]["format"];
   const std::string hash = Stage("modulus", "modulus", {{"target", t}, {"modulus", m}}, files, {}, [&](const std::string& dir) {
     std::vector<std::string> a = {"modulus", spec, "--alpha=" + Num(m["alpha"]), "--beta=" + Num(m["beta"]),
@@ -970,6 +1006,7 @@ void Runner::RunModulus() {
       a.push_back("--offset");
       for (const auto& x : m["offset"]) a.push_back(Num(x));
     }
+    if (m.contains("params")) a.insert(a.end(), {"--params", m["params"]});
     const json& v = m["versor"];
     if (v.contains("poly")) {
       a.insert(a.end(), {"--poly", v["poly"]});
@@ -996,7 +1033,13 @@ void Runner::RunPortal() {
   const bool render = exp_["pictures"]["enabled"].get<bool>() && p["output"]["format"] == "ply";
   total_ = 1 + (render ? 1 : 0);
   std::vector<std::string> files;
-  if (p.contains("spec") && p["spec"].is_string()) files.push_back(p["spec"]);
+  if (p.contains("spec") && p["spec"].is_string()) {
+    const std::string spec = p["spec"];
+    files.push_back(spec);
+    ReferencedFiles(ParseJson(ReadFile(spec), spec), fs::path(spec).parent_path(), files);
+  } else if (p.contains("spec")) {
+    ReferencedFiles(p["spec"], fs::path(exp_["experiment"].get<std::string>()).parent_path(), files);
+  }
   const std::string ext = p["output"]["format"];
   const std::string hash = Stage("portal", "portal", p, files, {}, [&](const std::string& dir) {
     std::vector<std::string> a = {"portal"};

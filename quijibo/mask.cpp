@@ -43,7 +43,7 @@ double Mask::distance(const Vec3& p) const {
     case Type::kHalfspace:
       return normal[0] * p[0] + normal[1] * p[1] + normal[2] * p[2] - offset;
     case Type::kSdf: {
-      const Vec3 u{p[0] / sdf_scale, p[1] / sdf_scale, p[2] / sdf_scale};
+      const Vec3 u{(p[0] - center[0]) / sdf_scale, (p[1] - center[1]) / sdf_scale, (p[2] - center[2]) / sdf_scale};
       return sdf_scale * ExtendedSample(*sdf, u);
     }
   }
@@ -66,7 +66,9 @@ std::string Mask::validate() const {
     }
     case Type::kSdf:
       if (!sdf) return "sdf mask has no grid";
-      if (!(sdf_scale > 0)) return "sdf scale must be > 0";
+      if (!(sdf_scale > 0) || !std::isfinite(sdf_scale)) return "sdf scale must be > 0";
+      for (double c : center)
+        if (!std::isfinite(c)) return "sdf center must be finite";
       break;
   }
   return {};
@@ -80,7 +82,7 @@ Vec3 ReadVec3(const JsonReader& r, const std::string& pointer) {
   return v;
 }
 
-Mask MaskFromJson(const JsonReader& r, const std::string& p, const std::string& base_dir) {
+Mask MaskFromJson(const JsonReader& r, const std::string& p, const std::string& base_dir, const MaskGridLoader& load) {
   Mask m;
   const std::string type = r.string(p + "/type");
   if (type == "sphere") {
@@ -103,13 +105,18 @@ Mask MaskFromJson(const JsonReader& r, const std::string& p, const std::string& 
     for (double& c : m.normal) c /= n;
     m.offset /= n;
   } else if (type == "sdf") {
-    r.allow_keys(p, {"type", "file", "scale"});
+    r.allow_keys(p, {"type", "file", "scale", "center"});
     m.type = Mask::Type::kSdf;
     m.sdf_path = r.string(p + "/file");
     std::filesystem::path path(m.sdf_path);
     if (path.is_relative() && !base_dir.empty()) path = std::filesystem::path(base_dir) / path;
-    m.sdf = std::make_shared<ScalarGrid>(ReadGrid(path.string()));
+    try {
+      m.sdf = load ? load(path.string()) : std::make_shared<ScalarGrid>(ReadGrid(path.string()));
+    } catch (const Error& e) {
+      r.fail(p + "/file", e.what());
+    }
     m.sdf_scale = r.number_or(p + "/scale", 1.0);
+    if (r.has(p + "/center")) m.center = ReadVec3(r, p + "/center");
   } else {
     r.fail(p + "/type", "expected \"sphere\", \"box\", \"halfspace\" or \"sdf\", found \"" + type + "\"");
   }
@@ -127,7 +134,7 @@ json MaskToJson(const Mask& m) {
     case Mask::Type::kHalfspace:
       return {{"type", "halfspace"}, {"normal", v(m.normal)}, {"offset", m.offset}};
     case Mask::Type::kSdf:
-      return {{"type", "sdf"}, {"file", m.sdf_path}, {"scale", m.sdf_scale}};
+      return {{"type", "sdf"}, {"file", m.sdf_path}, {"scale", m.sdf_scale}, {"center", v(m.center)}};
   }
   return {};
 }
@@ -219,7 +226,8 @@ std::string ParameterField::validate(const std::string& name) const {
   return {};
 }
 
-ParameterField ParameterFieldFromJson(const JsonReader& r, const std::string& p, const std::string& base_dir) {
+ParameterField ParameterFieldFromJson(const JsonReader& r, const std::string& p, const std::string& base_dir,
+                                      const MaskGridLoader& load) {
   if (r.at(p).is_number()) return ParameterField(r.number(p));
   r.allow_keys(p, {"value", "regions"});
   ParameterField f(r.number(p + "/value"));
@@ -229,7 +237,7 @@ ParameterField ParameterFieldFromJson(const JsonReader& r, const std::string& p,
       const std::string q = p + "/regions/" + std::to_string(i);
       r.allow_keys(q, {"mask", "value", "feather"});
       ParameterField::Region reg;
-      reg.mask = MaskFromJson(r, q + "/mask", base_dir);
+      reg.mask = MaskFromJson(r, q + "/mask", base_dir, load);
       reg.value = r.number(q + "/value");
       reg.feather = r.number(q + "/feather");
       if (!(reg.feather > 0)) r.fail(q + "/feather", "expected a number > 0");

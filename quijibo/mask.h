@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -27,23 +28,30 @@ inline double SmoothStep(double t) {
 struct Mask {
   enum class Type { kSphere, kBox, kHalfspace, kSdf };
   Type type = Type::kSphere;
-  Vec3 center{0.0, 0.0, 0.0};       // sphere, box
+  Vec3 center{0.0, 0.0, 0.0};       // sphere, box; sdf: where the grid's origin is placed
   double radius = 1.0;              // sphere
   Vec3 half_extent{0.5, 0.5, 0.5};  // box (axis aligned)
   Vec3 normal{1.0, 0.0, 0.0};       // half-space n.x <= offset is inside (n normalized on read)
   double offset = 0.0;
   std::shared_ptr<const ScalarGrid> sdf;  // "sdf": the grid, sampled in the modulus frame ...
-  double sdf_scale = 1.0;                 // ... as sdf_scale * grid(x / sdf_scale)
+  double sdf_scale = 1.0;                 // ... as sdf_scale * grid((x - center) / sdf_scale)
   std::string sdf_path;                   // for JSON output
 
   double distance(const Vec3& p) const;
   std::string validate() const;
 };
 
+// Loads the grid of an "sdf" mask from its file (path already resolved against base_dir). The
+// default reads a .qgrid as is; the commands pass one that also accepts meshes
+// (experiments/modulus_cmds.h LoadMaskGrid), which the core library cannot turn into an SDF.
+using MaskGridLoader = std::function<std::shared_ptr<const ScalarGrid>(const std::string& path)>;
+
 // {"type":"sphere","center":[x,y,z],"radius":r} | {"type":"box","center":..,"half_extent":..}
-// | {"type":"halfspace","normal":..,"offset":o} | {"type":"sdf","file":"a.qgrid","scale":s}
+// | {"type":"halfspace","normal":..,"offset":o}
+// | {"type":"sdf","file":"a.qgrid","scale":s,"center":[..]}   (scale 1 and centre 0 by default)
 // 2D documents may give 2-vectors (z = 0). Relative SDF paths are taken relative to base_dir.
-Mask MaskFromJson(const JsonReader& r, const std::string& pointer, const std::string& base_dir);
+Mask MaskFromJson(const JsonReader& r, const std::string& pointer, const std::string& base_dir,
+                  const MaskGridLoader& load = {});
 nlohmann::json MaskToJson(const Mask& m);
 
 // Signed distance of a ScalarGrid (fractal or any frame) extended beyond its box by the distance
@@ -102,7 +110,7 @@ struct ParameterField {
 
 // A number, or {"value": v, "regions": [{"mask": {...}, "value": v, "feather": f}, ...]}.
 ParameterField ParameterFieldFromJson(const JsonReader& r, const std::string& pointer,
-                                      const std::string& base_dir);
+                                      const std::string& base_dir, const MaskGridLoader& load = {});
 nlohmann::json ParameterFieldToJson(const ParameterField& f);
 
 // Reads a 2- or 3-vector at pointer (z = 0 when 2).

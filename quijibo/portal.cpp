@@ -92,10 +92,11 @@ Quat PortalMap::Apply(const Quat& q) const {
   return tq * b + base_->Apply(q) * (1.0 - b);
 }
 
-Portal PortalFromJson(const JsonReader& r, const std::string& p, const std::string& base_dir) {
+Portal PortalFromJson(const JsonReader& r, const std::string& p, const std::string& base_dir,
+                      const MaskGridLoader& load) {
   r.allow_keys(p, {"mask", "feather", "strength", "exclude_base", "transform"});
   Portal portal;
-  portal.mask = MaskFromJson(r, p + "/mask", base_dir);
+  portal.mask = MaskFromJson(r, p + "/mask", base_dir, load);
   portal.feather = r.number_or(p + "/feather", 0.0);
   portal.strength = r.number_or(p + "/strength", 1.0);
   portal.exclude_base = r.boolean_or(p + "/exclude_base", false);

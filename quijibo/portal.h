@@ -80,7 +80,8 @@ class PortalMap : public QuaternionMap {
 // Portal JSON: {"mask": {...mask...}, "feather": w, "strength": b, "exclude_base": bool,
 //   "transform": {"center": [..], "scale": s, "rotation": {"angle_deg": a, "axis": [..]},
 //                 "translation": [..], "noise": {"amplitude": a, "frequency": f, "octaves": n, "seed": k}}}
-Portal PortalFromJson(const JsonReader& r, const std::string& pointer, const std::string& base_dir);
+Portal PortalFromJson(const JsonReader& r, const std::string& pointer, const std::string& base_dir,
+                      const MaskGridLoader& load = {});
 nlohmann::json PortalToJson(const Portal& p);
 
 // The Koch snowflake of the 2024 paper (Figs. 4, 7, 8), worked out here: the hexagram H of

@@ -320,29 +320,7 @@ TEST(Portal, KochSnowflakeIoU) {
   std::filesystem::remove(path);
 }
 
-// Portals also work on QUIJIBO rational maps, cut by log|R| (the base set's function).
-TEST(Portal, WorksOnRationalMaps) {
-  RandomMapOptions ro;
-  ro.top = 3;
-  ro.bottom = 2;
-  ro.seed = 9;
-  auto rm = std::make_shared<RationalQuaternionMap>(RandomMap(ro));
-  Portal p;
-  p.mask.center = {0.5, 0, 0};
-  p.mask.radius = 0.3;
-  p.exclude_base = true;
-  p.transform.center = p.mask.center;
-  p.transform.scale = 2;
-  PortalMap pm(rm, {p}, [rm](const Quat& q) { return rm->LogModulus(q); });
-  const Quat q{0.55, 0.05, 0, 0};
-  if (rm->LogModulus(q) > 0) {
-    EXPECT_NEAR((pm.Apply(q) - Quat{0.1, 0.1, 0, 0}).norm(), 0.0, 1e-12);
-  } else {
-    EXPECT_NEAR((pm.Apply(q) - rm->Apply(q)).norm(), 0.0, 1e-12);
-  }
-  const Quat far{3, 0, 0, 0};
-  EXPECT_NEAR((pm.Apply(far) - rm->Apply(far)).norm(), 0.0, 1e-12);
-}
+// Portals on QUIJIBO rational maps: tests/modulus_features_test.cpp, Portal.OnAQuijiboMapRepeatsItsSet.
 
 using CliRun = quijibo::testing::CommandResult;
 inline CliRun Quijibo(const std::string& args) { return quijibo::testing::RunQuijibo(args); }
