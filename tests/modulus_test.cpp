@@ -436,34 +436,6 @@ TEST(ModulusCli, KochImageAndErrors) {
   std::filesystem::remove_all(dir);
 }
 
-// The shape modulus of the bunny (the baseline's polynomial and parameters) at 128^3: the sparse
-// mesh has no open edge away from the box faces, with speck removal off it is the dense mesh byte
-// for byte, and `modulus` takes the mesher's shared options.
-TEST(ModulusCli, BunnyModulusMeshIsWatertightAndDenseEqualsSparse) {
-  const auto dir = std::filesystem::temp_directory_path() / "quijibo_modulus_watertight";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  const std::string src = QUIJIBO_SOURCE_DIR;
-  const std::string base = "modulus " + src + "/data/bunny.obj --poly " + src +
-                           "/data/sm-baseline-poly10.json --alpha 30 --beta -0.02 --box -0.5 -0.5 -0.5 0.5 0.5 0.5 "
-                           "-r 128 --sdf-resolution 64 --speck-removal off -o ";
-  const std::string sparse = (dir / "s.ply").string(), dense = (dir / "d.ply").string();
-  const CliRun rs = Quijibo(base + sparse);
-  ASSERT_EQ(rs.code, 0) << rs.out;
-  const CliRun rd = Quijibo(base + dense + " --dense");
-  ASSERT_EQ(rd.code, 0) << rd.out;
-  const json s = json::parse(rs.out)["result"], d = json::parse(rd.out)["result"];
-  EXPECT_TRUE(s["sparse"].get<bool>());
-  EXPECT_FALSE(d["sparse"].get<bool>());
-  EXPECT_GT(s["triangles"].get<int>(), 10000);
-  EXPECT_EQ(s["open_edges_inside"], 0);
-  EXPECT_EQ(d["open_edges_inside"], 0);
-  EXPECT_EQ(s["components"], d["components"]);
-  EXPECT_FALSE(s["speck_removal"].get<bool>());
-  EXPECT_EQ(ReadFile(sparse), ReadFile(dense));
-  std::filesystem::remove_all(dir);
-}
-
 // `compare` end to end on a small sphere target and a random map (needs the mesher).
 TEST(ModulusCli, CompareWritesTableAndJson) {
   const auto dir = std::filesystem::temp_directory_path() / "quijibo_modulus_compare";

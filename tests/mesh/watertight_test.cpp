@@ -2,11 +2,17 @@
 // the summary's open-edge and component counts are right.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <set>
 
 #include "mesh/marching_cubes.h"
 #include "mesh/triangle_mesh.h"
 #include "mesh_fixtures.h"
+#include "quijibo_command.h"
 
 namespace quijibo {
 namespace {
@@ -92,6 +98,54 @@ TEST(Watertight, OpenEdgesOnTheBoxFacesAreSeparated) {
     for (const auto& tri : m.triangles)  // every open edge lies on x = 2 (sanity of the fixture)
       for (int c = 0; c < 3; ++c) ASSERT_LT(m.vertices[tri[c]][0], 2.0 + 1e-12);
   }
+}
+
+using nlohmann::json;
+using testing::CommandResult;
+using testing::RunQuijibo;
+
+// The shape modulus of the bunny (the baseline's polynomial and parameters) at 128^3, speck removal
+// off: neither mesh has an open edge away from the box faces, and the sparse mesh is the dense one
+// minus whole components (specks whose neighbourhood the search never reaches: 34 of 499 here,
+// docs/benchmarks.md §9), every sparse triangle being a dense triangle. `modulus` takes the
+// mesher's shared options.
+TEST(ModulusCli, BunnyModulusMeshIsWatertightAndSparseIsDenseMinusComponents) {
+  const auto dir = std::filesystem::temp_directory_path() / "quijibo_modulus_watertight";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string src = QUIJIBO_SOURCE_DIR;
+  const std::string base = "modulus " + src + "/data/bunny.obj --poly " + src +
+                           "/data/sm-baseline-poly10.json --alpha 30 --beta -0.02 --box -0.5 -0.5 -0.5 0.5 0.5 0.5 "
+                           "-r 128 --sdf-resolution 64 --speck-removal off -o ";
+  const std::string sparse = (dir / "s.ply").string(), dense = (dir / "d.ply").string();
+  const CommandResult rs = RunQuijibo(base + sparse);
+  ASSERT_EQ(rs.code, 0) << rs.out;
+  const CommandResult rd = RunQuijibo(base + dense + " --dense");
+  ASSERT_EQ(rd.code, 0) << rd.out;
+  const json s = json::parse(rs.out)["result"], d = json::parse(rd.out)["result"];
+  EXPECT_TRUE(s["sparse"].get<bool>());
+  EXPECT_FALSE(d["sparse"].get<bool>());
+  EXPECT_FALSE(s["speck_removal"].get<bool>());
+  EXPECT_EQ(s["specks_removed"], 0);
+  EXPECT_GT(s["triangles"].get<int>(), 100000);
+  EXPECT_EQ(s["open_edges_inside"], 0);
+  EXPECT_EQ(d["open_edges_inside"], 0);
+  EXPECT_LE(s["components"].get<int>(), d["components"].get<int>());
+  EXPECT_GE(s["components"].get<int>(), d["components"].get<int>() * 9 / 10);
+  // Every sparse triangle (as its corner positions) is a dense triangle.
+  auto key = [](const TriangleMesh& m, const std::array<int, 3>& t) {
+    std::array<Vec3, 3> p{m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]};
+    std::rotate(p.begin(), std::min_element(p.begin(), p.end()), p.end());
+    return p;
+  };
+  const TriangleMesh ms = ReadMesh(sparse), md = ReadMesh(dense);
+  std::set<std::array<Vec3, 3>> all;
+  for (const auto& t : md.triangles) all.insert(key(md, t));
+  std::int64_t missing = 0;
+  for (const auto& t : ms.triangles) missing += !all.count(key(ms, t));
+  EXPECT_EQ(missing, 0);
+  EXPECT_EQ(std::int64_t(ms.triangles.size()), s["triangles"].get<std::int64_t>());
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
