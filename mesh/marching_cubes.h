@@ -1,5 +1,6 @@
 // Meshing an implicit field: marching cubes with bisection on the edges, sparse coarse-to-fine
-// block search and parallel tiles (2015 paper §5; Kim and Duff 2020 for the 64-bit arrangement).
+// block search with surface following (block_search.cpp: no open edge away from the box faces) and
+// parallel tiles (2015 paper §5; Kim and Duff 2020 for the 64-bit arrangement).
 //
 // One mesher for every method: QUIJIBO rational maps, the shape modulus and portals all hand it a
 // BatchField. The surface is {f = iso}; "inside" is f < iso.
