@@ -38,6 +38,14 @@ using Mesher = std::function<bool(const BatchField& field, const MeshingOptions&
                                   FieldBand* band, TriangleMesh* mesh, JuliaFieldStats* stats)>;
 void AddMeshCommand(CLI::App& app, const Mesher& mesher);
 
+// The mesher's options (--dense, --speck-removal, --surface-following, the sparse search's settings),
+// one definition shared by `quijibo mesh`, `modulus` and `portal` (mesher_options.cpp); the
+// resolution and box are each command's own.
+void AddMesherOptions(CLI::App* command, MeshingOptions& options);
+// The mesher's summary as JSON: sizes, components, open edges (all, and away from the box faces),
+// specks, surface following, evaluations, tiles, blocks, seconds.
+nlohmann::json MesherSummaryJson(const MeshingSummary& summary, const MeshingOptions& options);
+
 // A target given on the command line: a .qgrid file, or an analytic shape ("sphere",
 // "torus:major=1,minor=0.3") sampled on the default target box (frame.h, TargetGridFrame)
 // at `resolution`.

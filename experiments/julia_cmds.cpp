@@ -123,9 +123,11 @@ int ParseAxis(const std::string& s) {
 
 struct MeshArgs {
   std::string map, out, obj, vdb, frame = "user", box, summary;
+  std::vector<std::string> vdb_grids{"surface", "density"};
+  double vdb_band = 3.0;
   JuliaArgs j;
   MeshingOptions meshing;
-  bool dense = false, ply_double = false, allow_empty = false;
+  bool ply_double = false, allow_empty = false;
 };
 
 struct MeshRun {
@@ -149,7 +151,6 @@ bool RunMesh(MeshArgs& a, const RationalMap& map, bool want_band, const Mesher& 
   o.min_corner = {c[0] - half, c[1] - half, c[2] - half};
   o.max_corner = {c[0] + half, c[1] + half, c[2] + half};
   if (!a.box.empty()) ParseBox(a.box, o.min_corner, o.max_corner);
-  o.sparse = !a.dense;
   if (auto why = o.validate(); !why.empty()) throw Error("mesh: " + why);
   a.j.finish({(o.min_corner[0] + o.max_corner[0]) / 2, (o.min_corner[1] + o.max_corner[1]) / 2,
               (o.min_corner[2] + o.max_corner[2]) / 2});
@@ -183,28 +184,25 @@ void AddMesh(CLI::App& app, const Mesher& mesher) {
   c->add_option("map", a->map, "map.json")->required();
   c->add_option("-o,--out", a->out, "Output mesh (.ply binary, or .obj)")->required();
   c->add_option("--obj", a->obj, "Also write the mesh as OBJ here");
-  c->add_option("--vdb", a->vdb, "Also write the field on a narrow band around the surface as OpenVDB");
+  c->add_option("--vdb", a->vdb, "Also write volumes as OpenVDB (--vdb-grids)");
+  c->add_option("--vdb-grids", a->vdb_grids,
+                "Grids of the .vdb: surface (narrow-band level set), density (fog volume), field (raw log|q_n| on "
+                "the surface's cells)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"surface", "density", "field"}))
+      ->capture_default_str();
+  c->add_option("--vdb-band", a->vdb_band, "Half-width of the level set's narrow band, voxels")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1000.0));
   c->add_option("-r,--resolution", a->meshing.resolution, "Cells along the longest side of the box")
       ->capture_default_str()
       ->check(CLI::Range(2, 65536));
-  c->add_flag("--dense", a->dense, "Evaluate every node (no sparse block search)");
   c->add_option("--frame", a->frame, "Coordinates of the output: user (the input mesh's) or fractal")
       ->capture_default_str()
       ->check(CLI::IsMember({"user", "fractal"}));
   c->add_option("--box", a->box, "Zoom box in the fractal frame: xmin,ymin,zmin,xmax,ymax,zmax (default: the whole "
                                  "normalized cube, its centre +-fractal_radius/2)");
-  c->add_option("--tile", a->meshing.tile_cells, "Cells per tile side")->capture_default_str();
-  c->add_option("--bisection-steps", a->meshing.bisection_steps, "Bisection steps per edge")->capture_default_str();
-  c->add_option("--margin", a->meshing.coarse_margin_cells, "Safety margin of the sparse search, cells")
-      ->capture_default_str();
-  c->add_option("--search-stride", a->meshing.search_stride, "Coarsest lattice of the sparse search, cells")
-      ->capture_default_str();
-  c->add_option("--value-margin", a->meshing.search_value_margin,
-                "Sparse search: also refine same-side blocks with a corner this close to iso (0: off; default: the "
-                "field's, 2 for log|q_n|)");
-  c->add_flag("--keep-specks", [a](std::int64_t) { a->meshing.remove_specks = false; },
-              "Keep the components that enclose a single lattice node (removed by default: sub-cell specks "
-              "that depend on where the lattice falls)");
+  AddMesherOptions(c, a->meshing);
   c->add_flag("--ply-double", a->ply_double, "PLY coordinates as double (default float)");
   c->add_flag("--allow-empty", a->allow_empty,
               "A surface that does not cross the box is a result, not an error: write the summary (0 "
@@ -218,7 +216,9 @@ void AddMesh(CLI::App& app, const Mesher& mesher) {
     const RationalMap map = ReadMap(a->map);
     a->meshing.show_progress = true;
     MeshRun run;
-    if (!RunMesh(*a, map, !a->vdb.empty(), mesher, run)) return;
+    auto wants = [&](const char* grid) { return std::find(a->vdb_grids.begin(), a->vdb_grids.end(), grid) != a->vdb_grids.end(); };
+    if (!a->vdb.empty() && a->vdb_grids.empty()) throw Error("--vdb-grids: name at least one grid");
+    if (!RunMesh(*a, map, !a->vdb.empty() && wants("field"), mesher, run)) return;
     const bool empty = run.mesh.triangles.empty();
     if (empty && !a->allow_empty)
       throw Error(a->map + ": the surface log|q_n| = " + std::to_string(a->j.iso) +
@@ -236,30 +236,37 @@ void AddMesh(CLI::App& app, const Mesher& mesher) {
     if (!a->obj.empty() && !empty) WriteObj(a->obj, run.mesh);
     if (!a->vdb.empty() && !empty) {
       const MeshLattice& l = run.band.lattice;
-      Vec3 origin = l.origin;
-      double spacing = l.spacing;
-      if (user) {
-        origin = map.frame.fractal_to_user(origin);
-        spacing /= map.frame.user_to_fractal_scale();
+      const double spacing = run.summary.spacing / (user ? map.frame.user_to_fractal_scale() : 1.0);
+      VdbVolumeOptions vo;
+      vo.voxel_size = spacing;
+      vo.half_width = a->vdb_band;
+      vo.surface = wants("surface");
+      vo.density = wants("density");
+      vo.coordinates = user ? "user" : "fractal";
+      VdbRawField raw;
+      if (wants("field")) {
+        raw.origin = user ? map.frame.fractal_to_user(l.origin) : l.origin;
+        raw.spacing = spacing;
+        raw.voxels = &run.band.nodes;
+        raw.values = &run.band.values;
+        raw.background = std::numeric_limits<float>::max();
+        raw.iso = a->j.iso;
+        raw.name = "julia";
+        raw.quantity = "log-modulus";
       }
-      WriteVdbSparse(a->vdb, origin, spacing, run.band.nodes, run.band.values, std::numeric_limits<float>::max(),
-                     a->j.iso, "julia", "log-modulus", user ? "user" : "fractal");
+      WriteVdbVolumes(a->vdb, run.mesh, vo, wants("field") ? &raw : nullptr);
     }
     const MeshTopology topo = AnalyzeTopology(run.mesh);
     const MeshingSummary& s = run.summary;
-    const json summary = {
+    json summary = {
         {"map", a->map}, {"out", empty ? json(nullptr) : json(a->out)}, {"frame", a->frame}, {"julia", a->j.to_json()},
         {"box", {{"min", a->meshing.min_corner}, {"max", a->meshing.max_corner}}},
         {"resolution", a->meshing.resolution}, {"cells", s.cells}, {"spacing", s.spacing},
-        {"sparse", a->meshing.sparse}, {"vertices", s.vertices}, {"triangles", s.triangles},
-        {"specks_removed", s.specks_removed},
-        {"boundary_edges", topo.boundary_edges}, {"non_manifold_edges", topo.non_manifold_edges},
-        {"evaluations", {{"nodes", s.nodes_evaluated}, {"search", s.search_evaluations},
-                         {"bisection", s.bisection_evaluations}, {"escaped", run.escaped},
-                         {"non_finite", s.non_finite_values}}},
-        {"tiles", {{"meshed", s.tiles_meshed}, {"total", s.tiles_total}}},
-        {"blocks", {{"active", s.blocks_active}, {"total", s.blocks_total}}},
-        {"band_nodes", run.band.nodes.size()}, {"seconds", s.seconds}};
+        {"band_nodes", run.band.nodes.size()}};
+    summary.update(MesherSummaryJson(s, a->meshing));
+    summary["boundary_edges"] = topo.boundary_edges;  // = open_edges (kept for older readers)
+    summary["non_manifold_edges"] = topo.non_manifold_edges;
+    summary["evaluations"]["escaped"] = run.escaped;
     WriteOutput(a->summary, summary.dump(2) + "\n");
   });
 }

@@ -202,6 +202,7 @@ struct OutputArgs {
   std::vector<double> box;  // 4 (2D) or 6 (3D) numbers
   int iterations = 3;
   double escape = 20;
+  MeshingOptions meshing;  // 3D: the shared mesher options (box and resolution set in Produce)
 };
 
 void AddOutputOptions(CLI::App* c, OutputArgs& o, bool required_out = true) {
@@ -213,6 +214,7 @@ void AddOutputOptions(CLI::App* c, OutputArgs& o, bool required_out = true) {
   c->add_option("--box", o.box, "Region: x0 y0 x1 y1 (2D) or x0 y0 z0 x1 y1 z1 (3D), unit frame");
   c->add_option("--iterations", o.iterations, "Map applications")->capture_default_str()->check(CLI::Range(1, 100000));
   c->add_option("--escape", o.escape, "Escape radius")->capture_default_str();
+  AddMesherOptions(c, o.meshing);
 }
 
 // Renders (2D) or meshes (3D) the field of `map`; returns a JSON report. Writes nothing.
@@ -253,7 +255,7 @@ Product Produce(std::shared_ptr<const QuaternionMap> map, const OutputArgs& o, c
     p.image = FieldImage(field, v, std::log(o.escape));
     p.report = {{"pixels", field.size()}, {"inside_pixels", inside}, {"view", {v.x_min, v.y_min, v.x_max, v.y_max}}};
   } else {
-    MeshingOptions mo;
+    MeshingOptions mo = o.meshing;
     if (!o.box.empty()) {
       if (o.box.size() != 6) throw Error("--box needs 6 numbers in 3D (x0 y0 z0 x1 y1 z1)");
       mo.min_corner = {o.box[0], o.box[1], o.box[2]};
@@ -269,13 +271,12 @@ Product Produce(std::shared_ptr<const QuaternionMap> map, const OutputArgs& o, c
     MeshingSummary ms;
     p.mesh = MeshField(MakeField(map, jo, 1.0), mo, &ms);
     p.kind = "ply";
-    p.report = {{"vertices", p.mesh.vertices.size()},
-                {"triangles", p.mesh.triangles.size()},
-                {"box", {mo.min_corner[0], mo.min_corner[1], mo.min_corner[2], mo.max_corner[0], mo.max_corner[1], mo.max_corner[2]}},
-                {"resolution", mo.resolution},
-                {"nodes_evaluated", ms.nodes_evaluated},
-                {"bisection_evaluations", ms.bisection_evaluations},
-                {"non_finite_values", ms.non_finite_values}};
+    p.report = MesherSummaryJson(ms, mo);
+    p.report["box"] = {mo.min_corner[0], mo.min_corner[1], mo.min_corner[2], mo.max_corner[0], mo.max_corner[1], mo.max_corner[2]};
+    p.report["resolution"] = mo.resolution;
+    p.report["nodes_evaluated"] = ms.nodes_evaluated;
+    p.report["bisection_evaluations"] = ms.bisection_evaluations;
+    p.report["non_finite_values"] = ms.non_finite_values;
   }
   p.report["seconds"] = Now() - t0;
   p.report["cpu_seconds"] = CpuSeconds() - c0;
@@ -539,6 +540,7 @@ void AddModulusCommands(CLI::App& app) {
       int sdf_resolution = 100;
       double alpha = 30, beta = 0;
       std::vector<double> offset;
+      std::vector<int> authors_frame;  // sdf resolution[, nodes]
       bool two_d = false;
       VersorArgs versor;
       OutputArgs out;
@@ -555,6 +557,12 @@ void AddModulusCommands(CLI::App& app) {
     c->add_option("--sdf-resolution", a->sdf_resolution, "Mesh targets: SDF cells on [-0.5,0.5]^3")
         ->capture_default_str()->check(CLI::Range(8, 2048));
     c->add_flag("--2d", a->two_d, "Complex plane (slice z = 0 of a 3D target); implied by a .png output");
+    c->add_option("--authors-frame", a->authors_frame,
+                  "Compatibility: read the target the way the authors' code reads its SDF file (x and z swapped, "
+                  "stretched by (NODES-1)/RES; docs/modulus-portals.md). RES = their sdfGen resolution, NODES = "
+                  "nodes per side of their .f3d (default RES-1)")
+        ->expected(1, 2)
+        ->delimiter(',');
     AddVersorOptions(c, a->versor);
     AddOutputOptions(c, a->out);
     c->callback([a] {
@@ -569,7 +577,15 @@ void AddModulusCommands(CLI::App& app) {
       so.beta = a->beta;
       if (!a->offset.empty()) so.origin_offset = {a->offset[0], a->offset[1], a->offset[2]};
       if (!a->params.empty()) ReadModulusParams(a->params, so, a->sdf_resolution);
-      const Versor v = MakeVersor(a->versor, lt.target);
+      const Versor v = MakeVersor(a->versor, lt.target);  // roots in the target's own frame
+      if (!a->authors_frame.empty()) {
+        if (two_d) throw Error("--authors-frame is for 3D targets");
+        AuthorsFrame af;
+        af.sdf_resolution = a->authors_frame[0];
+        af.nodes = a->authors_frame.size() > 1 ? a->authors_frame[1] : af.sdf_resolution - 1;
+        lt.target = InAuthorsFrame(lt.target, af);
+        lt.info["authors_frame"] = {{"sdf_resolution", af.sdf_resolution}, {"nodes", af.nodes}};
+      }
       auto map = std::make_shared<ShapeModulusMap>(lt.target, v, so);
       Product p = Produce(map, a->out, lt.target, two_d);
       if (!a->versor.write_poly.empty()) {

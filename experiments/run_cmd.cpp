@@ -1162,7 +1162,11 @@ void Runner::WriteReport(double total_seconds) {
     md << "## Mesh\n\n`mesh/julia.ply`" << (exists("mesh/julia.vdb") ? ", `mesh/julia.vdb`" : "")
        << (exists("mesh/julia.obj") ? ", `mesh/julia.obj`" : "") << " (" << ms.value("frame", std::string("user"))
        << " frame): " << ms.value("vertices", 0LL) << " vertices, " << ms.value("triangles", 0LL) << " triangles, "
-       << ms.value("boundary_edges", 0LL) << " boundary edges, " << ms.value("resolution", 0) << "^3 cells, n = "
+       << ms.value("components", 0LL) << " components, " << ms.value("open_edges", ms.value("boundary_edges", 0LL))
+       << " open edges (" << ms.value("open_edges_inside", 0LL) << " away from the box faces), "
+       << (ms.value("speck_removal", true) ? std::to_string(ms.value("specks_removed", 0LL)) + " one-node specks removed"
+                                            : std::string("one-node specks kept"))
+       << ", " << ms.value("resolution", 0) << "^3 cells, n = "
        << ms["julia"].value("iterations", 0) << ", " << Fixed(ms.value("seconds", 0.0), 1) << " s.\n\n";
   }
   for (const char* prod : {"modulus", "portal"}) {

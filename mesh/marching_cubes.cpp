@@ -27,10 +27,13 @@
 #include <limits>
 #include <sstream>
 
+#include "mesh/mesher_internal.h"
 #include "quijibo/error.h"
 #include "quijibo/progress.h"
 
 namespace quijibo {
+
+using namespace mesher;
 
 namespace {
 
@@ -143,163 +146,6 @@ const CaseTable& Table() {
   return t;
 }
 
-// ---------------------------------------------------------------------------------------------
-
-inline bool Inside(double v, double iso) { return v < iso; }  // NaN and +inf: outside
-
-struct Counters {
-  std::atomic<std::int64_t> nodes{0}, bisection{0}, non_finite{0}, search{0};
-};
-
-// Evaluates `points` into `values` (one call per chunk), counting non-finite values.
-void Evaluate(const BatchField& field, const Vec3* points, std::size_t n, double* values,
-              std::atomic<std::int64_t>& counter, Counters& counters) {
-  if (n == 0) return;
-  field.evaluate(points, n, values);
-  std::int64_t bad = 0;
-  for (std::size_t i = 0; i < n; ++i) bad += !std::isfinite(values[i]);
-  counter += std::int64_t(n);
-  if (bad) counters.non_finite += bad;
-}
-
-// Evaluates many points in parallel chunks (for the sparse search).
-void EvaluateParallel(const BatchField& field, const std::vector<Vec3>& points, std::vector<double>& values,
-                      Counters& counters) {
-  values.assign(points.size(), 0.0);
-  const std::int64_t chunk = 2048, n = std::int64_t(points.size());
-  const std::int64_t chunks = (n + chunk - 1) / chunk;
-#pragma omp parallel for schedule(dynamic)
-  for (std::int64_t c = 0; c < chunks; ++c) {
-    const std::int64_t b = c * chunk, e = std::min(n, b + chunk);
-    Evaluate(field, points.data() + b, std::size_t(e - b), values.data() + b, counters.search, counters);
-  }
-  counters.nodes += n;
-}
-
-struct Geometry {
-  MeshLattice lattice;
-  std::array<std::int64_t, 3> nodes;  // nodes per axis
-  std::int64_t node_id(std::int64_t i, std::int64_t j, std::int64_t k) const {
-    return i + nodes[0] * (j + nodes[1] * k);
-  }
-};
-
-// Blocks of `stride` cells: block b spans cells [b s, min((b + 1) s, n)).
-struct BlockGrid {
-  int stride;
-  std::array<std::int64_t, 3> count;
-  std::int64_t id(std::int64_t i, std::int64_t j, std::int64_t k) const { return i + count[0] * (j + count[1] * k); }
-  std::array<std::int64_t, 3> coords(std::int64_t id) const {
-    return {id % count[0], (id / count[0]) % count[1], id / (count[0] * count[1])};
-  }
-};
-
-BlockGrid MakeBlocks(const MeshLattice& l, int stride) {
-  BlockGrid g{stride, {}};
-  for (int a = 0; a < 3; ++a) g.count[a] = (l.cells[a] + stride - 1) / stride;
-  return g;
-}
-
-// The sparse search: returns the sorted ids of the active blocks of `block_cells`.
-std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOptions& o, int first_stride,
-                                       const Geometry& geo, Counters& counters, const PointsEvaluator& external) {
-  const MeshLattice& l = geo.lattice;
-  std::vector<std::int64_t> candidates;  // block ids at the current stride
-  int stride = first_stride;
-  {
-    const BlockGrid g = MakeBlocks(l, stride);
-    candidates.resize(std::size_t(g.count[0] * g.count[1] * g.count[2]));
-    for (std::size_t i = 0; i < candidates.size(); ++i) candidates[i] = std::int64_t(i);
-  }
-  const double value_margin = o.search_value_margin >= 0 ? o.search_value_margin : field.value_margin;
-  Progress progress("mesh: sparse search", 1.0, !o.show_progress);
-  double done = 0.0;
-  for (;;) {
-    const BlockGrid g = MakeBlocks(l, stride);
-    // Corner nodes of the candidates.
-    std::vector<std::int64_t> keys;
-    keys.reserve(candidates.size() * 8);
-    auto corner = [&](std::int64_t b, int a, int bit) { return std::min<std::int64_t>((b + bit) * stride, l.cells[a]); };
-    for (std::int64_t id : candidates) {
-      const auto c = g.coords(id);
-      for (int v = 0; v < 8; ++v)
-        keys.push_back(geo.node_id(corner(c[0], 0, v & 1), corner(c[1], 1, (v >> 1) & 1), corner(c[2], 2, (v >> 2) & 1)));
-    }
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    std::vector<Vec3> points(keys.size());
-    for (std::size_t i = 0; i < keys.size(); ++i) {
-      const std::int64_t k = keys[i];
-      points[i] = l.node(k % geo.nodes[0], (k / geo.nodes[0]) % geo.nodes[1], k / (geo.nodes[0] * geo.nodes[1]));
-    }
-    std::vector<double> values;
-    if (external) {
-      external(points, values);
-      if (values.size() != points.size()) throw Error("meshing: the search evaluator returned a wrong count");
-      std::int64_t bad = 0;
-      for (double v : values) bad += !std::isfinite(v);
-      counters.search += std::int64_t(points.size());
-      counters.nodes += std::int64_t(points.size());
-      counters.non_finite += bad;
-    } else {
-      EvaluateParallel(field, points, values, counters);
-    }
-    points = {};
-    auto value_of = [&](std::int64_t key) {
-      return values[std::size_t(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin())];
-    };
-    // Crossing blocks.
-    std::vector<std::int64_t> crossing;
-    for (std::int64_t id : candidates) {
-      const auto c = g.coords(id);
-      int in = 0;
-      double nearest = std::numeric_limits<double>::infinity();  // smallest |f - iso| at a corner
-      for (int v = 0; v < 8; ++v) {
-        const double f = value_of(geo.node_id(corner(c[0], 0, v & 1), corner(c[1], 1, (v >> 1) & 1),
-                                              corner(c[2], 2, (v >> 2) & 1)));
-        in += Inside(f, field.iso);
-        if (std::isfinite(f)) nearest = std::min(nearest, std::abs(f - field.iso));
-      }
-      // Same-side corners close to iso may hide a speck smaller than the block: keep it too.
-      if ((in != 0 && in != 8) || nearest < value_margin) crossing.push_back(id);
-    }
-    // Dilate by the margin (at least one block).
-    const int m = std::max(1, (o.coarse_margin_cells + stride - 1) / stride);
-    std::vector<std::int64_t> marked;
-    marked.reserve(crossing.size() * 8);
-    for (std::int64_t id : crossing) {
-      const auto c = g.coords(id);
-      for (std::int64_t dk = -m; dk <= m; ++dk)
-        for (std::int64_t dj = -m; dj <= m; ++dj)
-          for (std::int64_t di = -m; di <= m; ++di) {
-            const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
-            if (i < 0 || j < 0 || k < 0 || i >= g.count[0] || j >= g.count[1] || k >= g.count[2]) continue;
-            marked.push_back(g.id(i, j, k));
-          }
-    }
-    std::sort(marked.begin(), marked.end());
-    marked.erase(std::unique(marked.begin(), marked.end()), marked.end());
-    done = 0.5 * (done + 1.0);
-    progress.update(done, std::to_string(marked.size()) + " blocks of " + std::to_string(stride) + " cells");
-    if (stride == o.block_cells) {
-      progress.finish();
-      return marked;
-    }
-    // Children at half the stride.
-    const int half = stride / 2;
-    const BlockGrid child = MakeBlocks(l, half);
-    candidates.clear();
-    for (std::int64_t id : marked) {
-      const auto c = g.coords(id);
-      for (int v = 0; v < 8; ++v) {
-        const std::int64_t i = 2 * c[0] + (v & 1), j = 2 * c[1] + ((v >> 1) & 1), k = 2 * c[2] + ((v >> 2) & 1);
-        if (i < child.count[0] && j < child.count[1] && k < child.count[2]) candidates.push_back(child.id(i, j, k));
-      }
-    }
-    std::sort(candidates.begin(), candidates.end());
-    stride = half;
-  }
-}
 
 // Meshes one tile. `active` (per block of the tile, x fastest) says which blocks to mesh.
 void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& geo, const std::array<int, 3>& c0,
@@ -467,7 +313,11 @@ std::string MeshingSummary::report() const {
     << blocks_total << "\n"
     << "field evaluations " << nodes_evaluated << " at nodes (" << search_evaluations << " in the search) + "
     << bisection_evaluations << " in bisection, non-finite " << non_finite_values << "\n"
-    << "vertices " << vertices << ", triangles " << triangles << ", one-node specks removed " << specks_removed
+    << "surface following " << follow_evaluations << " evaluations (in the search), " << blocks_followed
+    << " blocks added\n"
+    << "vertices " << vertices << ", triangles " << triangles << ", components " << components
+    << ", open edges " << open_edges << " (" << open_edges_inside << " away from the box faces)\n"
+    << "one-node specks " << (speck_removal ? "removed " + std::to_string(specks_removed) : std::string("kept"))
     << ", " << seconds << " s\n";
   return s.str();
 }
@@ -485,14 +335,6 @@ MeshLattice LatticeFor(const MeshingOptions& o) {
   return l;
 }
 
-namespace {
-Geometry GeometryFor(const MeshLattice& l) {
-  Geometry geo;
-  geo.lattice = l;
-  for (int a = 0; a < 3; ++a) geo.nodes[a] = l.cells[a] + 1;
-  return geo;
-}
-}  // namespace
 
 TilePlan PlanTiles(const BatchField& field, const MeshingOptions& o, const PointsEvaluator& search_evaluate) {
   if (auto why = o.validate(); !why.empty()) throw Error("meshing: " + why);
@@ -517,8 +359,13 @@ TilePlan PlanTiles(const BatchField& field, const MeshingOptions& o, const Point
 
   // Active blocks (sorted ids), or all of them.
   std::vector<std::int64_t> active_blocks;
-  if (plan.sparse) active_blocks = SearchBlocks(field, o, stride, geo, counters, search_evaluate);
-  plan.search_evaluations = counters.search;
+  if (plan.sparse) {
+    active_blocks = SearchBlocks(field, o, stride, geo, counters, search_evaluate);
+    if (o.follow_surface)
+      plan.blocks_followed = FollowSurface(field, o, geo, active_blocks, counters, search_evaluate);
+  }
+  plan.follow_evaluations = counters.follow;
+  plan.search_evaluations = counters.search + counters.follow;
   plan.search_non_finite = counters.non_finite;
 
   // Tiles.
@@ -581,63 +428,6 @@ TilePiece MeshTilePiece(const BatchField& field, const TilePlan& plan, std::size
   return piece;
 }
 
-// Removes the components that enclose a single lattice node: 6 vertices on the 6 edges of that
-// node and 8 triangles. Such a speck is smaller than a cell and exists in the mesh only because a
-// node happened to fall into it (log|q_n| is steep enough to make one-node islands and bubbles
-// common); the sparse search cannot promise to find them and a shifted lattice would not see
-// them, so neither mode keeps them. `edges[v]` is vertex v's edge id (sorted). Returns how many.
-std::int64_t RemoveNodeSpecks(const MeshLattice& l, const std::vector<std::int64_t>& edges, TriangleMesh& mesh) {
-  const std::size_t nv = mesh.vertices.size();
-  std::vector<int> parent(nv);
-  for (std::size_t v = 0; v < nv; ++v) parent[v] = int(v);
-  auto find = [&](int v) {
-    while (parent[std::size_t(v)] != v) v = parent[std::size_t(v)] = parent[std::size_t(parent[std::size_t(v)])];
-    return v;
-  };
-  for (const auto& t : mesh.triangles)
-    for (int k = 1; k < 3; ++k) {
-      const int a = find(t[0]), b = find(t[k]);
-      if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b);
-    }
-  std::vector<int> verts(nv, 0), tris(nv, 0);
-  for (std::size_t v = 0; v < nv; ++v) ++verts[std::size_t(find(int(v)))];
-  for (const auto& t : mesh.triangles) ++tris[std::size_t(find(t[0]))];
-  const std::int64_t nx = l.cells[0] + 1, ny = l.cells[1] + 1;
-  const std::int64_t step[3] = {1, nx, nx * ny};
-  // Candidate components: 6 vertices and 8 triangles. A speck's 6 edges share one lattice node:
-  // list (component, edge end) for every candidate vertex, sort, and look for 6 equal entries.
-  std::vector<std::pair<int, std::int64_t>> ends;
-  for (std::size_t v = 0; v < nv; ++v) {
-    const int root = find(int(v));
-    if (verts[std::size_t(root)] == 6 && tris[std::size_t(root)] == 8) {
-      const std::int64_t node = edges[v] / 3;
-      ends.push_back({root, node});
-      ends.push_back({root, node + step[edges[v] % 3]});
-    }
-  }
-  std::sort(ends.begin(), ends.end());
-  std::vector<char> speck(nv, 0);
-  std::int64_t removed = 0;
-  for (std::size_t i = 0; i + 5 < ends.size(); ++i)
-    if (ends[i] == ends[i + 5] && !speck[std::size_t(ends[i].first)]) {
-      speck[std::size_t(ends[i].first)] = 1;
-      ++removed;
-    }
-  if (!removed) return 0;
-  std::vector<int> remap(nv, -1);
-  std::size_t kept = 0;
-  for (std::size_t v = 0; v < nv; ++v)
-    if (!speck[std::size_t(find(int(v)))]) {
-      remap[v] = int(kept);
-      mesh.vertices[kept++] = mesh.vertices[v];
-    }
-  mesh.vertices.resize(kept);
-  std::size_t kt = 0;
-  for (const auto& t : mesh.triangles)
-    if (remap[std::size_t(t[0])] >= 0) mesh.triangles[kt++] = {remap[std::size_t(t[0])], remap[std::size_t(t[1])], remap[std::size_t(t[2])]};
-  mesh.triangles.resize(kt);
-  return removed;
-}
 
 TriangleMesh WeldTilePieces(const TilePlan& plan, std::vector<TilePiece>& pieces, MeshingSummary* summary,
                             FieldBand* band) {
@@ -682,6 +472,7 @@ TriangleMesh WeldTilePieces(const TilePlan& plan, std::vector<TilePiece>& pieces
     r.triangles = {};
   }
   const std::int64_t specks = plan.options.remove_specks ? RemoveNodeSpecks(plan.lattice, edges, mesh) : 0;
+  const LatticeMeshFacts facts = summary ? AnalyzeLatticeMesh(plan.lattice, edges, mesh) : LatticeMeshFacts{};
   if (band) {
     band->lattice = plan.lattice;
     band->nodes.clear();
@@ -704,6 +495,12 @@ TriangleMesh WeldTilePieces(const TilePlan& plan, std::vector<TilePiece>& pieces
     s.blocks_total = plan.blocks_total;
     s.blocks_active = blocks_active;
     s.specks_removed = specks;
+    s.speck_removal = plan.options.remove_specks;
+    s.follow_evaluations = plan.follow_evaluations;
+    s.blocks_followed = plan.blocks_followed;
+    s.open_edges = facts.open_edges;
+    s.open_edges_inside = facts.open_edges_inside;
+    s.components = facts.components;
     s.vertices = std::int64_t(mesh.vertices.size());
     s.triangles = std::int64_t(mesh.triangles.size());
     s.cells = plan.lattice.cells;

@@ -1,5 +1,6 @@
 // Meshing an implicit field: marching cubes with bisection on the edges, sparse coarse-to-fine
-// block search and parallel tiles (2015 paper §5; Kim and Duff 2020 for the 64-bit arrangement).
+// block search with surface following (block_search.cpp: no open edge away from the box faces) and
+// parallel tiles (2015 paper §5; Kim and Duff 2020 for the 64-bit arrangement).
 //
 // One mesher for every method: QUIJIBO rational maps, the shape modulus and portals all hand it a
 // BatchField. The surface is {f = iso}; "inside" is f < iso.
@@ -48,6 +49,9 @@ struct MeshingOptions {
   double search_value_margin = -1.0;  // sparse: overrides BatchField::value_margin when >= 0
   bool remove_specks = true;          // drop components enclosing a single lattice node (sub-cell
                                       // specks a node fell into by chance; docs/meshing.md)
+  // Added by issue 16: sparse: mesh the block across every face of a meshed block that the surface
+  // crosses, until none is left, so no piece of surface the search touched is cut open.
+  bool follow_surface = true;
   bool show_progress = false;         // Progress on stderr (quijibo/progress.h)
   std::string validate() const;       // empty when valid, else what is wrong
 };
@@ -64,6 +68,13 @@ struct MeshingSummary {
   std::int64_t blocks_total = 0;
   std::int64_t vertices = 0, triangles = 0;
   std::int64_t specks_removed = 0;      // one-node components dropped (remove_specks)
+  // Added by issue 16:
+  std::int64_t follow_evaluations = 0;  // surface following (included in nodes_evaluated)
+  std::int64_t blocks_followed = 0;     // blocks added by surface following (in blocks_active)
+  std::int64_t open_edges = 0;          // mesh edges used by one triangle ...
+  std::int64_t open_edges_inside = 0;   // ... of which away from the box faces (0 unless a bug)
+  std::int64_t components = 0;          // connected components of the mesh
+  bool speck_removal = true;            // whether specks were removed
   int search_stride = 0;                // the stride the sparse search used (0: dense)
   std::array<int, 3> cells{0, 0, 0};    // cells per axis of the lattice meshed
   double spacing = 0.0;                 // cell side
@@ -120,12 +131,13 @@ struct TilePlan {
   std::vector<std::int64_t> tile_ids;                 // tiles to mesh, ascending (x fastest)
   std::vector<std::vector<std::int64_t>> tile_blocks; // sparse: active block ids of each (empty: dense)
   std::int64_t search_evaluations = 0, search_non_finite = 0;
+  std::int64_t follow_evaluations = 0, blocks_followed = 0;  // surface following (in the search's counts)
   std::int64_t blocks_total = 0;
   double search_seconds = 0.0;
   std::int64_t tiles_total() const { return tiles[0] * tiles[1] * tiles[2]; }
 };
 
-// The sparse block search (or the dense tile list). Throws quijibo::Error on invalid options.
+// The sparse block search and surface following (or the dense tile list). Throws quijibo::Error on invalid options.
 // `search_evaluate` (optional) replaces the local parallel evaluation of the search lattice.
 TilePlan PlanTiles(const BatchField& field, const MeshingOptions& options, const PointsEvaluator& search_evaluate = {});
 

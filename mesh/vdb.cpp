@@ -2,6 +2,8 @@
 
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/LevelSetUtil.h>
+#include <openvdb/tools/MeshToVolume.h>
 
 #include <algorithm>
 #include <cmath>
@@ -72,10 +74,12 @@ void WriteVdb(const std::string& path, const ScalarGrid& grid, const std::string
   WriteGridAtomically(path, vdb);
 }
 
-void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
-                    const std::vector<std::array<int, 3>>& voxels, const std::vector<float>& values,
-                    float background, double iso, const std::string& name, const std::string& quantity,
-                    const std::string& coordinates) {
+namespace {
+
+openvdb::FloatGrid::Ptr SparseGrid(const std::string& path, const Vec3& origin, double spacing,
+                                   const std::vector<std::array<int, 3>>& voxels, const std::vector<float>& values,
+                                   float background, double iso, const std::string& name, const std::string& quantity,
+                                   const std::string& coordinates) {
   if (voxels.size() != values.size()) throw Error(path + ": cannot write VDB: voxel and value counts differ");
   if (!(spacing > 0) || !std::isfinite(spacing)) throw Error(path + ": cannot write VDB: bad spacing");
   InitializeOpenVdb();
@@ -91,7 +95,87 @@ void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
   auto acc = vdb->getAccessor();
   for (std::size_t n = 0; n < voxels.size(); ++n)
     acc.setValueOn(openvdb::Coord(voxels[n][0], voxels[n][1], voxels[n][2]), values[n]);
-  WriteGridAtomically(path, vdb);
+  return vdb;
+}
+
+}  // namespace
+
+void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
+                    const std::vector<std::array<int, 3>>& voxels, const std::vector<float>& values,
+                    float background, double iso, const std::string& name, const std::string& quantity,
+                    const std::string& coordinates) {
+  WriteGridAtomically(path, SparseGrid(path, origin, spacing, voxels, values, background, iso, name, quantity,
+                                       coordinates));
+}
+
+std::string VdbVolumeOptions::validate() const {
+  if (!(voxel_size > 0) || !std::isfinite(voxel_size)) return "the voxel size must be finite and > 0";
+  if (!(half_width >= 1) || !(half_width <= 1000)) return "the band half-width must be in [1, 1000] voxels";
+  return {};
+}
+
+void WriteVdbVolumes(const std::string& path, const TriangleMesh& mesh, const VdbVolumeOptions& o,
+                     const VdbRawField* raw) {
+  if (auto why = o.validate(); !why.empty()) throw Error(path + ": cannot write VDB: " + why);
+  if (!o.surface && !o.density && !raw) throw Error(path + ": cannot write VDB: no grid asked for");
+  InitializeOpenVdb();
+  openvdb::GridPtrVec grids;
+  if (o.surface || o.density) {
+    if (mesh.triangles.empty()) throw Error(path + ": cannot write VDB: the mesh has no triangles");
+    const auto xform = openvdb::math::Transform::createLinearTransform(o.voxel_size);
+    std::vector<openvdb::Vec3s> points;
+    points.reserve(mesh.vertices.size());
+    for (const Vec3& v : mesh.vertices) points.emplace_back(float(v[0]), float(v[1]), float(v[2]));  // world
+    std::vector<openvdb::Vec3I> triangles;
+    triangles.reserve(mesh.triangles.size());
+    for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+    const float w = float(o.half_width);
+    openvdb::FloatGrid::Ptr surface;
+    try {
+      surface = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*xform, points, triangles, w);
+    } catch (const std::exception& e) {
+      throw Error(path + ": cannot build the level set: " + e.what());
+    }
+    surface->setName("surface");
+    surface->setGridClass(openvdb::GRID_LEVEL_SET);
+    surface->insertMeta("quijibo_quantity", openvdb::StringMetadata("signed-distance"));
+    surface->insertMeta("quijibo_coordinates", openvdb::StringMetadata(o.coordinates));
+    if (o.density) {
+      // 1 on the interior (tiles included), then the ramp on the band.
+      const float band = float(o.half_width * o.voxel_size);
+      auto density = openvdb::FloatGrid::create(0.0f);
+      density->setTransform(surface->transform().copy());
+      density->topologyUnion(*openvdb::tools::sdfInteriorMask(*surface));
+      for (auto it = density->beginValueOn(); it; ++it) it.setValue(1.0f);
+      auto acc = density->getAccessor();
+      for (auto it = surface->cbeginValueOn(); it; ++it) {
+        const float ramp = std::clamp(0.5f - *it / (2.0f * band), 0.0f, 1.0f);
+        if (it.isVoxelValue()) {
+          if (ramp > 0.0f) acc.setValueOn(it.getCoord(), ramp);
+          else acc.setValueOff(it.getCoord(), 0.0f);
+        }
+      }
+      density->pruneGrid();
+      density->setName("density");
+      density->setGridClass(openvdb::GRID_FOG_VOLUME);
+      density->insertMeta("quijibo_quantity", openvdb::StringMetadata("density"));
+      density->insertMeta("quijibo_coordinates", openvdb::StringMetadata(o.coordinates));
+      grids.push_back(density);
+    }
+    if (o.surface) grids.insert(grids.begin(), surface);
+  }
+  if (raw) {
+    if (!raw->voxels || !raw->values) throw Error(path + ": cannot write VDB: the raw field has no samples");
+    grids.push_back(SparseGrid(path, raw->origin, raw->spacing, *raw->voxels, *raw->values, raw->background, raw->iso,
+                               raw->name, raw->quantity, o.coordinates));
+  }
+  std::ostringstream bytes(std::ios::binary);
+  try {
+    openvdb::io::Stream(bytes).write(grids);
+  } catch (const std::exception& e) {
+    throw Error(path + ": cannot write VDB: " + e.what());
+  }
+  WriteFileAtomically(path, std::move(bytes).str());
 }
 
 ScalarGrid ReadVdb(const std::string& path, const std::string& name) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "mesh/triangle_mesh.h"
 #include "quijibo/grid.h"
 
 namespace quijibo {
@@ -27,6 +28,35 @@ void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
                     const std::vector<std::array<int, 3>>& voxels, const std::vector<float>& values,
                     float background, double iso, const std::string& name, const std::string& quantity,
                     const std::string& coordinates);
+
+// Volumes that Houdini and Blender use as they are (issue 16), from a welded triangle mesh:
+//  - "surface": a narrow-band level set (GRID_LEVEL_SET) built by openvdb::tools::meshToLevelSet:
+//    signed distance in the mesh's units, negative inside, background = half_width * voxel_size;
+//  - "density": a fog volume (GRID_FOG_VOLUME): 1 inside, 0 outside, and across the band the
+//    smooth ramp 0.5 - d / (2 half_width voxel_size) of the distance d (0.5 on the surface);
+//  - optionally the raw field on its own band (`raw`, as WriteVdbSparse).
+// Voxel (i, j, k) is centred at voxel_size * (i, j, k) (world origin on a voxel centre). The inside
+// is found by OpenVDB's flood fill from the outside, so a surface cut open by the box faces gets
+// an unreliable sign near the cut. Atomic; throws quijibo::Error.
+struct VdbVolumeOptions {
+  double voxel_size = 0.0;  // world units (> 0)
+  double half_width = 3.0;  // narrow band half-width, voxels (>= 1)
+  bool surface = true;
+  bool density = true;
+  std::string coordinates;  // metadata quijibo_coordinates
+  std::string validate() const;
+};
+struct VdbRawField {
+  Vec3 origin{0.0, 0.0, 0.0};
+  double spacing = 0.0;
+  const std::vector<std::array<int, 3>>* voxels = nullptr;
+  const std::vector<float>* values = nullptr;
+  float background = 0.0f;
+  double iso = 0.0;
+  std::string name, quantity;
+};
+void WriteVdbVolumes(const std::string& path, const TriangleMesh& mesh, const VdbVolumeOptions& options,
+                     const VdbRawField* raw = nullptr);
 
 // Reads the FloatGrid `name` (the first FloatGrid when empty) back onto the grid its active
 // voxels span. Needs a uniform linear transform. Throws quijibo::Error.

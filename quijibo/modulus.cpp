@@ -78,6 +78,28 @@ ModulusTarget ModulusTargetFromGrid(std::shared_ptr<const ScalarGrid> grid, doub
 
 ModulusTarget ModulusTargetFromUnitGrid(std::shared_ptr<const ScalarGrid> grid) { return FromGrid(std::move(grid), 1.0); }
 
+std::string AuthorsFrame::validate() const {
+  if (sdf_resolution < 1) return "authors' frame: the SDF resolution must be >= 1";
+  if (nodes < 2) return "authors' frame: the node count must be >= 2";
+  return {};
+}
+
+ModulusTarget InAuthorsFrame(const ModulusTarget& target, const AuthorsFrame& frame) {
+  if (auto why = frame.validate(); !why.empty()) throw Error(why);
+  if (target.dimension != 3) throw Error("authors' frame: only for 3D targets");
+  const double stretch = double(frame.nodes - 1) / double(frame.sdf_resolution);
+  auto g = [stretch](double t) { return -0.5 + (std::clamp(t, -0.5, 0.5) + 0.5) * stretch; };
+  auto g_inverse = [stretch](double u) { return -0.5 + (u + 0.5) / stretch; };
+  ModulusTarget out = target;
+  out.phi = [phi = target.phi, g](const Vec3& p) { return phi({g(p[2]), g(p[1]), g(p[0])}); };
+  for (int a = 0; a < 3; ++a) {
+    out.box_min[a] = std::clamp(g_inverse(target.box_min[2 - a]), -0.5, 0.5);
+    out.box_max[a] = std::clamp(g_inverse(target.box_max[2 - a]), -0.5, 0.5);
+  }
+  out.name = target.name + " (authors' frame)";
+  return out;
+}
+
 double PolygonSdf(const std::vector<std::array<double, 2>>& poly, double x, double y) {
   double d2 = 1e300;
   bool inside = false;

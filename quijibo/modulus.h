@@ -68,6 +68,21 @@ ModulusTarget ModulusTargetFromUnitGrid(std::shared_ptr<const ScalarGrid> grid);
 // two triangles), "disc[:radius=r]" (2D).
 ModulusTarget AnalyticModulusTarget(const std::string& spec);
 
+// The authors' frame (compatibility; docs/modulus-portals.md): their code reads its SDF file back
+// transposed (written z fastest, read x fastest: it sees phi(z, y, x)) and stretched (their reader
+// puts node i of n at -0.5 + i / (n - 1) on the unit box, their SDF generator spaced the nodes
+// 1 / sdf_resolution from -0.5), and clamps queries to the box. The returned target reads `target`
+// the way their code reads its file: phi'(x, y, z) = phi(g(z), g(y), g(x)) with
+// g(t) = -0.5 + (clamp(t, -0.5, 0.5) + 0.5) (nodes - 1) / sdf_resolution; its box is the image of
+// the target's box. The versor's roots are NOT moved (neither are they in their code). Throws
+// quijibo::Error unless 2 <= nodes and 1 <= sdf_resolution, and for 2D targets.
+struct AuthorsFrame {
+  int sdf_resolution = 100;  // their sdfGen resolution (node spacing 1 / sdf_resolution)
+  int nodes = 99;            // nodes per side of their .f3d (sdfGen gave 99 for 100 in the baseline)
+  std::string validate() const;
+};
+ModulusTarget InAuthorsFrame(const ModulusTarget& target, const AuthorsFrame& frame);
+
 // Signed distance to a simple polygon (vertices in order, either orientation), negative inside.
 double PolygonSdf(const std::vector<std::array<double, 2>>& polygon, double x, double y);
 // The hexagram (two equilateral triangles of side s, centroids at the origin, one pointing up),

@@ -159,6 +159,64 @@ TEST(ShapeModulus, HighAlphaSetMatchesSphere) {
   EXPECT_GT(double(both) / either, 0.9);
 }
 
+// The authors' frame: phi read at (g(z), g(y), g(x)), g(t) = -0.5 + (clamp(t) + 0.5) (nodes - 1) / res.
+TEST(AuthorsFrame, SwapsXAndZAndStretches) {
+  ModulusTarget t;
+  t.phi = [](const Vec3& p) { return p[0] + 2 * p[1] + 4 * p[2]; };
+  t.box_min = {-0.4, -0.3, -0.2};
+  t.box_max = {0.4, 0.3, 0.2};
+  AuthorsFrame f;
+  f.sdf_resolution = 10;
+  f.nodes = 9;  // stretch 0.8
+  const ModulusTarget c = InAuthorsFrame(t, f);
+  EXPECT_NEAR(c.phi({0.1, -0.2, 0.3}), 0.14 + 2 * -0.26 + 4 * -0.02, 1e-12);
+  EXPECT_NEAR(c.phi({0.9, 0.0, 0.0}), -0.1 + 2 * -0.1 + 4 * 0.3, 1e-12);  // clamped to the box
+  EXPECT_NEAR(c.box_min[0], -0.125, 1e-12);
+  EXPECT_NEAR(c.box_max[0], 0.375, 1e-12);
+  EXPECT_NEAR(c.box_min[2], -0.375, 1e-12);
+  EXPECT_NEAR(c.box_max[2], 0.5, 1e-12);  // 0.625 clamped
+  f.nodes = 1;
+  EXPECT_THROW(InAuthorsFrame(t, f), Error);
+}
+
+// On a small lattice: an ellipsoid long in x becomes, at high alpha, a Julia set long in z, stretched
+// about the box's min corner; the roots stay put.
+TEST(AuthorsFrame, JuliaSetOfAnEllipsoidIsSwappedAndStretched) {
+  const Vec3 axes{0.35, 0.2, 0.12};
+  auto ellipsoid = [axes](const Vec3& p) {
+    const double r = std::sqrt(std::pow(p[0] / axes[0], 2) + std::pow(p[1] / axes[1], 2) + std::pow(p[2] / axes[2], 2));
+    return (r - 1) * axes[2];
+  };
+  ModulusTarget t;
+  t.phi = ellipsoid;
+  AuthorsFrame f;
+  f.sdf_resolution = 100;
+  f.nodes = 91;  // stretch 0.9, so that the test sees it (and the origin stays inside)
+  VersorGeneratorOptions o;
+  o.seed = 5;
+  Versor v;
+  v.polynomial = GenerateVersorPolynomial(o);
+  ShapeModulusOptions so;
+  so.alpha = 300.0;
+  ShapeModulusMap map(InAuthorsFrame(t, f), v, so);
+  auto g = [](double x) { return -0.5 + (x + 0.5) * 0.9; };
+  const int n = 32;
+  int both = 0, either = 0, both_plain = 0, either_plain = 0;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const Vec3 p{-0.5 + (i + 0.5) / n, -0.5 + (j + 0.5) / n, -0.5 + (k + 0.5) / n};
+        const bool julia = IterateField(map, {p[0], p[1], p[2], 0.0}, IterationOptions{}) < 0;
+        const bool expected = ellipsoid({g(p[2]), g(p[1]), g(p[0])}) < 0;
+        const bool plain = ellipsoid(p) < 0;
+        both += julia && expected, either += julia || expected;
+        both_plain += julia && plain, either_plain += julia || plain;
+      }
+  ASSERT_GT(either, 0);
+  EXPECT_GT(double(both) / either, 0.85);
+  EXPECT_LT(double(both_plain) / either_plain, 0.4);  // 0.23 between the two ellipsoids
+}
+
 // Paper's sign: exp(alpha (phi + beta)); the surface is near phi = -beta.
 TEST(ShapeModulus, NegativeBetaMovesTheSurfaceOutwards) {
   VersorGeneratorOptions o;

@@ -66,6 +66,26 @@ TEST_P(JuliaMeshIterations, DenseAndSparseAgreeAndThreadsDoNotMatter) {
   EXPECT_EQ(t.non_manifold_edges, 0);
   EXPECT_EQ(t.misoriented_edges, 0);
   EXPECT_EQ(ss.non_finite_values, 0);
+  // Watertight away from the box faces (surface following), in both modes; the summary counts open
+  // edges like AnalyzeTopology.
+  EXPECT_EQ(ss.open_edges, t.boundary_edges);
+  EXPECT_EQ(ss.open_edges_inside, 0);
+  EXPECT_EQ(sd.open_edges_inside, 0);
+  EXPECT_EQ(ss.components, sd.components);
+
+  // With speck removal off the two modes still give the same mesh, bit for bit: the search found
+  // every one-node speck of this map too.
+  o.remove_specks = false;
+  MeshingSummary ks, kd;
+  const TriangleMesh dense_all = MeshField(field, o, &kd);
+  o.sparse = true;
+  const TriangleMesh sparse_all = MeshField(field, o, &ks);
+  EXPECT_EQ(sparse_all.vertices, dense_all.vertices);
+  EXPECT_EQ(sparse_all.triangles, dense_all.triangles);
+  EXPECT_EQ(ks.specks_removed, 0);
+  EXPECT_EQ(kd.triangles - sd.triangles, 8 * sd.specks_removed);
+  EXPECT_EQ(ks.open_edges_inside, 0);
+  o.remove_specks = true;
 
   o.sparse = true;
   const int threads = omp_get_max_threads();
