@@ -32,8 +32,8 @@
 namespace quijibo {
 
 // The evaluator setting (one definition for the command line and the experiment files):
-//   "auto"    the narrow band in double (it never does more than a dense sweep's work per
-//             evaluation beyond the band, and pays from the first levels on), cached otherwise
+//   "auto"    the narrow band in double (no evaluation touches more cells than a dense one, and
+//             once the fit forms they touch 6-13 % of them: docs/benchmarks.md §8), else cached
 //   "band"    log-linear, narrow band (quijibo/band_energy.h): same psi and gradient as dense
 //   "dense"   log-linear, every cell ("loglinear" is the older name of the same)
 //   "cached"  the paper's product caches, any precision

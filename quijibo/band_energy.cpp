@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 
 #include "quijibo/error.h"
@@ -205,9 +203,6 @@ Evaluation<double> BandEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mod
   if (beyond || extra_ + k > m) {
     Evaluation<double> ev = Sweep(x, variable, with_gradient);
     const bool adopt = !beyond || anchor_weights_version_ != dense_->weights_version() || !(ev.energy > anchor_energy_);
-    if (std::getenv("QUIJIBO_BAND_DEBUG"))
-      std::fprintf(stderr, "band: sweep (%s%s) d %.3g cap %.3g k %lld extra %lld m %lld\n", beyond ? "reach" : "work",
-                   adopt ? ", anchor" : "", d, list_cap_, (long long)k, extra_, (long long)m);
     if (adopt) {
       Adopt(x, variable, ev.energy);
       ++stats_.anchors;
