@@ -25,6 +25,7 @@ void AddModuleCommands(CLI::App& app);  // sdf, monopoles
 void AddModulusCommands(CLI::App& app);  // modulus, portal, compare, bench modulus (after AddBenchCommand)
 void AddJuliaCommands(CLI::App& app);   // mesh, picture, bench mesh (after AddBenchCommand)
 void AddShapeCommands(CLI::App& app);  // fidelity, bench shapes (after AddBenchCommand)
+void AddBenchBandCommand(CLI::App& app);  // bench band (after AddBenchCommand)
 void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/run_cmd.cpp)
 
 // Reads, validates and resolves an experiment file (every default filled in, every path absolute);

@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   quijibo::cli::AddModulusCommands(app);
   quijibo::cli::AddJuliaCommands(app);
   quijibo::cli::AddShapeCommands(app);
+  quijibo::cli::AddBenchBandCommand(app);
   quijibo::cli::AddRunCommand(app);
   try {
     app.parse(argc, argv);

@@ -13,7 +13,7 @@ namespace quijibo::cli {
 void AddOptimizeCommand(CLI::App& app) {
   struct Args {
     std::string target, map_path, schedule = "25(VFRF)50(VFRF)97(VF)", out_dir, weights = WeightFieldName(OptimizeOptions{}.weights),
-                level_weights = "sample", evaluator = "loglinear", precision = "double", backend = "lbfgspp",
+                level_weights = "sample", evaluator = OptimizeOptions{}.evaluator, precision = "double", backend = "lbfgspp",
                 storage = "auto", level_start = LevelStartName(OptimizeOptions{}.level_start);
     double memory_budget_gb = 8.0;
     int target_resolution = 97, memory = 5, absolute_every = 10, checkpoint_every = 25;
@@ -38,8 +38,11 @@ void AddOptimizeCommand(CLI::App& app) {
   c->add_option("--max-r", a->max_r, "Iteration cap of R passes")->capture_default_str()->check(CLI::Range(1, 10000000));
   c->add_option("--tolerance", a->tolerance, "Projected-gradient tolerance (infinity norm) of every pass")
       ->capture_default_str();
-  c->add_option("-e,--evaluator", a->evaluator, "loglinear or cached")->capture_default_str()
-      ->check(CLI::IsMember({"loglinear", "cached"}));
+  c->add_option("-e,--evaluator", a->evaluator,
+                "auto (band in double, else cached), band (log-linear, narrow band), dense (log-linear, every "
+                "cell; also: loglinear) or cached (the paper's)")
+      ->capture_default_str()
+      ->check(CLI::IsMember(kEvaluatorNames));
   c->add_option("-p,--precision", a->precision, "float, double, long-double, float128 (cached)")
       ->capture_default_str()
       ->check(CLI::IsMember({"float", "double", "long-double", "float128"}));

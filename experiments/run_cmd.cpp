@@ -166,9 +166,9 @@ void ReadOptimizer(Reader& rd, const std::string& p, const fs::path& base, bool 
       r.fail(p + "/name", "expected a non-empty name of letters, digits, '-', '_' or '.' (it names a folder)");
   }
   rd.Str(p + "/backend", "lbfgspp", {"lbfgspp", "ceres"});
-  const std::string ev = rd.Str(p + "/evaluator", "loglinear", {"loglinear", "cached"});
+  const std::string ev = rd.Str(p + "/evaluator", OptimizeOptions{}.evaluator, kEvaluatorNames);
   const std::string pr = rd.Str(p + "/precision", "double", {"float", "double", "long-double", "float128"});
-  if (ev == "loglinear" && pr != "double")
+  if (ResolveEvaluator(ev, ParsePrecision(pr)) != "cached" && pr != "double")
     r.fail(p + "/precision", "the loglinear evaluator runs in double only; use \"evaluator\": \"cached\" for \"" +
                                  pr + "\"");
   rd.Str(p + "/weights", WeightFieldName(OptimizeOptions{}.weights), {"layer", "inverse", "balanced"});

@@ -1,5 +1,6 @@
 #include "optim/optimizer.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
@@ -12,6 +13,7 @@
 #include "optim/ceres_backend.h"
 #include "optim/lbfgsb.h"
 #include "optim/reweight.h"
+#include "quijibo/band_energy.h"
 #include "quijibo/cached_energy.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
@@ -43,11 +45,19 @@ std::string LevelStartName(OptimizeOptions::LevelStart s) {
   return s == OptimizeOptions::LevelStart::kBest ? "best" : "last";
 }
 
+std::string ResolveEvaluator(const std::string& name, Precision precision) {
+  if (name == "auto") return precision == Precision::kDouble ? "band" : "cached";
+  if (name == "loglinear") return "dense";
+  if (name == "band" || name == "dense" || name == "cached") return name;
+  throw Error("unknown evaluator \"" + name + "\": expected auto, band, dense (loglinear) or cached");
+}
+
 std::string OptimizeOptions::validate() const {
   if (auto why = schedule.validate(); !why.empty()) return why;
-  if (evaluator != "loglinear" && evaluator != "cached") return "evaluator must be loglinear or cached";
-  if (evaluator == "loglinear" && precision != Precision::kDouble)
-    return "the loglinear evaluator runs in double only";
+  if (std::find(kEvaluatorNames.begin(), kEvaluatorNames.end(), evaluator) == kEvaluatorNames.end())
+    return "evaluator must be auto, band, dense (loglinear) or cached";
+  if (ResolveEvaluator(evaluator, precision) != "cached" && precision != Precision::kDouble)
+    return "the loglinear evaluator (band or dense) runs in double only";
   if (backend != "lbfgspp" && backend != "ceres")
     return "unknown back end \"" + backend + "\" (available: lbfgspp, ceres)";
   if (backend == "ceres" && precision != Precision::kDouble) return "the ceres back end runs in double only";
@@ -66,7 +76,7 @@ json PassSummary::ToJson() const {
           {"energy_end", energy_end}, {"absolute_end", absolute_end},
           {"overflowed_cells", overflowed_cells}, {"message", message},
           {"line_search_restarts", line_search_restarts}, {"stalled", stalled},
-          {"stall_reason", stalled ? StallReason() : std::string()}};
+          {"stall_reason", stalled ? StallReason() : std::string()}, {"band", band}};
 }
 
 std::string PassSummary::StallReason() const {
@@ -95,6 +105,7 @@ PassSummary PassSummary::FromJson(const json& j) {
   p.message = j.value("message", "");
   p.line_search_restarts = j.value("line_search_restarts", 0);
   p.stalled = j.value("stalled", p.iterations == 0);
+  if (j.contains("band")) p.band = j.at("band");
   return p;
 }
 
@@ -130,6 +141,16 @@ std::string OptimizeSummary::Report() const {
                   p.stalled ? "  STALLED" : "");
     s << line;
   }
+  for (const PassSummary& p : passes)
+    if (p.band.is_object()) {
+      std::snprintf(line, sizeof line,
+                    "band: level %d pass %c: %.1f %% of the dense work (%.2f %% of %lld cells per band "
+                    "evaluation, %lld anchors), energy error vs dense %.1e\n",
+                    p.level, p.kind, 100.0 * p.band.value("work_fraction", 0.0),
+                    100.0 * p.band.value("mean_fraction", 0.0), p.band.value("cells", 0LL),
+                    p.band.value("anchors", 0LL), p.band.value("energy_error", 0.0));
+      s << line;
+    }
   for (const PassSummary& p : passes)
     if (p.stalled)
       s << "stalled: level " << p.level << " pass " << p.kind << " (pass " << p.pass_index + 1
@@ -190,6 +211,10 @@ class Objective {
   virtual Evaluation<Scalar> Evaluate(const Vector& x, EnergyMode mode) = 0;
   virtual void BeginVariablePass(const Vector& x) = 0;
   virtual void SetWeights(const std::vector<double>& w, double eta) = 0;
+  virtual void BeginPass() {}
+  // What the pass's end adds to its summary (the band's statistics), given x and the energy the
+  // pass ended with.
+  virtual nlohmann::json PassReport(const Vector&, EnergyMode, Scalar) { return nullptr; }
 };
 
 class LogLinearObjective : public Objective<double> {
@@ -201,6 +226,34 @@ class LogLinearObjective : public Objective<double> {
 
  private:
   LogLinearEnergy* e_;
+};
+
+// The narrow band (band_energy.h) over a dense evaluator's matrix; at every pass's end the
+// energy is compared with the dense one.
+class BandObjective : public Objective<double> {
+ public:
+  explicit BandObjective(LogLinearEnergy* e) : dense_(e), band_(e) {}
+  Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode) override { return band_.Evaluate(x, mode); }
+  void BeginVariablePass(const Eigen::VectorXd& x) override { dense_->BeginVariablePass(x); }
+  void SetWeights(const std::vector<double>& w, double eta) override { dense_->SetWeights(w, eta); }
+  void BeginPass() override {
+    band_.Invalidate();
+    band_.ResetStats();
+  }
+  json PassReport(const Eigen::VectorXd& x, EnergyMode mode, double energy) override {
+    const double dense = dense_->Evaluate(x, mode, false).energy;
+    const BandStats& s = band_.stats();
+    return {{"cells", s.cells}, {"band_cells", s.band_cells}, {"mean_fraction", s.mean_fraction()},
+            {"work_fraction", s.work_fraction()}, {"max_cells", s.max_exact}, {"evaluations", s.evaluations},
+            {"anchors", s.anchors}, {"anchors_reach", s.anchors_reach}, {"anchors_work", s.anchors_work},
+            {"far_sweeps", s.far},
+            {"dense_fallbacks", s.dense_fallbacks}, {"energy_dense", dense},
+            {"energy_error", std::fabs(energy - dense) / std::max(1e-300, std::fabs(dense))}};
+  }
+
+ private:
+  LogLinearEnergy* dense_;
+  BandEnergy band_;
 };
 
 template <class Scalar>
@@ -231,6 +284,8 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   fs::create_directories(o.out_dir, ec);
   if (ec) throw Error(o.out_dir + ": cannot create the output folder: " + ec.message());
 
+  const std::string evaluator = ResolveEvaluator(o.evaluator, o.precision);
+  const bool loglinear = evaluator == "band" || evaluator == "dense";
   const std::string fingerprint = o.schedule.notation() + "|" + o.evaluator + "|" + PrecisionName(o.precision) +
                                   "|" + WeightFieldName(o.weights) + "|" + std::to_string(map.top_count()) + "/" +
                                   std::to_string(map.bottom_count());
@@ -315,7 +370,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   if (!o.resume) {
     summary.absolute_start = absolute_energy(x);
     best_absolute = summary.absolute_start;
-    emit({{"type", "run"}, {"schedule", o.schedule.notation()}, {"evaluator", o.evaluator},
+    emit({{"type", "run"}, {"schedule", o.schedule.notation()}, {"evaluator", evaluator},
           {"precision", PrecisionName(o.precision)}, {"backend", o.backend}, {"weights", WeightFieldName(o.weights)},
           {"roots", {{"top", map.top_count()}, {"bottom", map.bottom_count()}}}, {"step", 0},
           {"absolute_energy", summary.absolute_start}});
@@ -358,13 +413,15 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     const LevelSpec& level = o.schedule.levels[li];
     const EnergyGrid grid = MakeEnergyGrid(sdf, finest_w, o.weights, level.resolution, o.level_weights, 0.0);
     // At the finest level the log-linear evaluator shares the absolute one's matrix.
-    const bool share = o.evaluator == "loglinear" && grid.frame == finest.frame;
+    const bool share = loglinear && grid.frame == finest.frame;
     std::unique_ptr<LogLinearEnergy> level_energy;
     std::unique_ptr<Objective<Scalar>> objective;
     if constexpr (std::is_same_v<Scalar, double>) {
-      if (o.evaluator == "loglinear") {
+      if (loglinear) {
         if (!share) level_energy = std::make_unique<LogLinearEnergy>(map, grid, o.energy, o.loglinear);
-        objective = std::make_unique<LogLinearObjective>(share ? &absolute : level_energy.get());
+        LogLinearEnergy* e = share ? &absolute : level_energy.get();
+        if (evaluator == "band") objective = std::make_unique<BandObjective>(e);
+        else objective = std::make_unique<LogLinearObjective>(e);
       }
     }
     if (!objective) objective = std::make_unique<CachedObjective<Scalar>>(map, grid, o.energy);
@@ -399,6 +456,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       }
       const EnergyGrid& pass_grid = spec.kind == PassKind::kReweighted ? rgrid : grid;
       objective->SetWeights(pass_grid.weight, pass_grid.eta);
+      objective->BeginPass();
       const bool variable = spec.kind == PassKind::kVariable;
       const EnergyMode mode = variable ? EnergyMode::kVariable : EnergyMode::kFull;
       if (variable) objective->BeginVariablePass(x);
@@ -485,6 +543,8 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       ps.iterations = res.iterations;
       ps.evaluations = res.evaluations;
       ps.energy_end = ToDouble(res.f);
+      // Before absolute_energy, which changes a shared evaluator's weights.
+      ps.band = objective->PassReport(x, mode, res.f);
       ps.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_t0).count();
       ps.absolute_end = absolute_energy(x);
       ps.stalled = ps.iterations == 0;

@@ -31,9 +31,19 @@
 
 namespace quijibo {
 
+// The evaluator setting (one definition for the command line and the experiment files):
+//   "auto"    the narrow band in double (no evaluation touches more cells than a dense one, and
+//             once the fit forms they touch 6-13 % of them: docs/benchmarks.md §8), else cached
+//   "band"    log-linear, narrow band (quijibo/band_energy.h): same psi and gradient as dense
+//   "dense"   log-linear, every cell ("loglinear" is the older name of the same)
+//   "cached"  the paper's product caches, any precision
+inline const std::vector<std::string> kEvaluatorNames = {"auto", "band", "dense", "loglinear", "cached"};
+// The evaluator a run uses: "band", "dense" or "cached". Throws on an unknown name.
+std::string ResolveEvaluator(const std::string& name, Precision precision);
+
 struct OptimizeOptions {
   Schedule schedule;
-  std::string evaluator = "loglinear";  // "loglinear" (double) or "cached" (any precision)
+  std::string evaluator = "auto";  // kEvaluatorNames
   Precision precision = Precision::kDouble;
   std::string backend = "lbfgspp";      // "lbfgspp" (L-BFGS-B) or "ceres" (L-BFGS on x = y^2)
   // Balanced layer weights: a misclassified cell costs the same inside and outside, as in the IoU
@@ -65,6 +75,9 @@ struct PassSummary {
   std::string message;
   int line_search_restarts = 0;  // line-search failures recovered by resetting the L-BFGS memory
   bool stalled = false;          // no iteration: the pass could not (or did not need to) move
+  // Narrow band passes: cells evaluated, anchors and the energy error against the dense
+  // evaluator at the pass's end (null otherwise).
+  nlohmann::json band;
   std::string StallReason() const;  // why a stalled pass did not move, in words
   nlohmann::json ToJson() const;
   static PassSummary FromJson(const nlohmann::json& j);

@@ -10,6 +10,53 @@
 
 namespace quijibo {
 
+namespace loglinear {
+
+// Out of line on purpose: both evaluators must run the very same instructions (see the header).
+__attribute__((noinline)) double Dot(const double* coeff, const double* row, int r) {
+  double s = 0;
+#pragma omp simd reduction(+ : s)
+  for (int j = 0; j < r; ++j) s += coeff[j] * row[j];
+  return s;
+}
+
+__attribute__((noinline)) void Axpy(double g, const double* row, double* G, int r) {
+#pragma omp simd
+  for (int j = 0; j < r; ++j) G[j] += g * row[j];
+}
+
+__attribute__((noinline)) double VariableL(double lnC, double tau, double beta, double s_top, double s_bottom) {
+  return lnC + tau * s_top - beta * s_bottom;
+}
+
+__attribute__((noinline)) double Tanh(double alpha, double L, double W, double* g) {
+  const double th = std::tanh(alpha * L);
+  *g = -alpha * W * (1.0 - th * th);
+  return th;
+}
+
+__attribute__((noinline)) Fixed EnergyFixed(double th, double W, double scale, bool* nonfinite) {
+  const double e = -th * W * scale;
+  if (!std::isfinite(e) || std::fabs(e) >= 0x1p126) {
+    *nonfinite = true;
+    return 0;
+  }
+  return Fixed(e);
+}
+
+__attribute__((noinline)) void AccumulateVariable(double g, double s_top, double s_bottom, double* sums) {
+  sums[0] += g;
+  sums[1] += g * s_top;
+  sums[2] += g * s_bottom;
+}
+
+double EnergyScale(double sum_abs_weight) {
+  if (!(sum_abs_weight > 0) || !std::isfinite(sum_abs_weight)) return 1.0;
+  return std::ldexp(1.0, 100 - std::ilogb(sum_abs_weight) - 1);
+}
+
+}  // namespace loglinear
+
 using Storage = LogLinearOptions::Storage;
 
 std::string LogLinearOptions::validate() const {
@@ -55,6 +102,7 @@ LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
       cells_.push_back(c);
       weight_.push_back(grid.weight[c]);
     }
+  UpdateScale();
   const std::int64_t m = std::int64_t(cells_.size());
   const int r = root_count();
   if (storage_ == Storage::kAuto)
@@ -102,11 +150,33 @@ void LogLinearEnergy::CheckX(const Eigen::VectorXd& x) const {
     if (!std::isfinite(x[i])) throw Error("energy: variable " + std::to_string(i) + " is not finite");
 }
 
+void LogLinearEnergy::UpdateScale() {
+  double sum = 0;
+  for (double w : weight_) sum += std::fabs(w);
+  energy_scale_ = loglinear::EnergyScale(sum);
+  ++weights_version_;
+}
+
 void LogLinearEnergy::SetWeights(const std::vector<double>& grid_weight, double eta) {
   if (std::int64_t(grid_weight.size()) != total_cells_) throw Error("weights do not match the energy grid");
   if (!(eta > 0) || !std::isfinite(eta)) throw Error("eta must be positive and finite");
   for (std::size_t a = 0; a < cells_.size(); ++a) weight_[a] = grid_weight[std::size_t(cells_[a])];
   eta_ = eta;
+  UpdateScale();
+}
+
+const double* LogLinearEnergy::RowOf(std::int64_t a, double* buffer) const {
+  const int r = root_count();
+  if (storage_ == Storage::kDouble) return d_double_.data() + std::size_t(a) * r;
+  if (storage_ == Storage::kFloat)
+    for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
+  else Row(a, buffer);
+  return buffer;
+}
+
+void LogLinearEnergy::Coefficients(const Eigen::VectorXd& x, double* coeff) const {
+  for (int j = 0; j < nt_; ++j) coeff[j] = x[1] * x[3 + j];
+  for (int j = nt_; j < root_count(); ++j) coeff[j] = -x[2] * x[3 + j];
 }
 
 std::vector<double> LogLinearEnergy::LogModulus(const Eigen::VectorXd& x) const {
@@ -114,23 +184,14 @@ std::vector<double> LogLinearEnergy::LogModulus(const Eigen::VectorXd& x) const 
   const std::int64_t m = std::int64_t(cells_.size());
   const int r = root_count();
   std::vector<double> coeff(r);
-  for (int j = 0; j < nt_; ++j) coeff[j] = x[1] * x[3 + j];
-  for (int j = nt_; j < r; ++j) coeff[j] = -x[2] * x[3 + j];
+  Coefficients(x, coeff.data());
   std::vector<double> L(std::size_t(total_cells_), std::numeric_limits<double>::quiet_NaN());
 #pragma omp parallel if (m > kEnergyBlock)
   {
     std::vector<double> buffer(r);
 #pragma omp for schedule(static)
-    for (std::int64_t a = 0; a < m; ++a) {
-      const double* row = buffer.data();
-      if (storage_ == Storage::kDouble) row = d_double_.data() + std::size_t(a) * r;
-      else if (storage_ == Storage::kFloat)
-        for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
-      else Row(a, buffer.data());
-      double s = 0;
-      for (int j = 0; j < r; ++j) s += coeff[j] * row[j];
-      L[std::size_t(cells_[a])] = x[0] + s;
-    }
+    for (std::int64_t a = 0; a < m; ++a)
+      L[std::size_t(cells_[a])] = x[0] + loglinear::Dot(coeff.data(), RowOf(a, buffer.data()), r);
   }
   return L;
 }
@@ -147,11 +208,7 @@ void LogLinearEnergy::BeginVariablePass(const Eigen::VectorXd& x) {
     std::vector<double> buffer(r);
 #pragma omp for schedule(static)
     for (std::int64_t a = 0; a < m; ++a) {
-      const double* row = buffer.data();
-      if (storage_ == Storage::kDouble) row = d_double_.data() + std::size_t(a) * r;
-      else if (storage_ == Storage::kFloat)
-        for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
-      else Row(a, buffer.data());
+      const double* row = RowOf(a, buffer.data());
       double st = 0, sb = 0;
       for (int j = 0; j < nt_; ++j) st += e[j] * row[j];
       for (int j = nt_; j < r; ++j) sb += e[j] * row[j];
@@ -159,27 +216,33 @@ void LogLinearEnergy::BeginVariablePass(const Eigen::VectorXd& x) {
       s_bottom_[a] = sb;
     }
   }
+  ++variable_version_;
 }
 
 Evaluation<double> LogLinearEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mode,
                                              bool with_gradient) const {
+  return EvaluateCapturing(x, mode, with_gradient, nullptr, nullptr);
+}
+
+Evaluation<double> LogLinearEnergy::EvaluateCapturing(const Eigen::VectorXd& x, EnergyMode mode, bool with_gradient,
+                                                      double* L_active, double* row_norm) const {
+  using loglinear::Fixed;
   const auto start = std::chrono::steady_clock::now();
   CheckX(x);
   const bool variable = mode == EnergyMode::kVariable;
-  if (variable && s_top_.size() != cells_.size())
-    throw Error("energy: a V-pass evaluation needs BeginVariablePass first");
+  if (variable && !variable_ready()) throw Error("energy: a V-pass evaluation needs BeginVariablePass first");
   const std::int64_t m = std::int64_t(cells_.size());
   const int r = root_count();
-  const double lnC = x[0], tau = x[1], beta = x[2], alpha = options_.alpha;
+  const double lnC = x[0], tau = x[1], beta = x[2], alpha = options_.alpha, scale = energy_scale_;
   // L_c = ln C + sum_j coeff_j D_cj, coeff = [tau T, -beta B].
   std::vector<double> coeff(r);
-  for (int j = 0; j < nt_; ++j) coeff[j] = tau * x[3 + j];
-  for (int j = nt_; j < r; ++j) coeff[j] = -beta * x[3 + j];
-  const int ng = with_gradient ? (variable ? 3 : r + 3) : 0;
-  // Block partials: [energy, sum g, sum g S_T, sum g S_B] and, in full mode, G_r.
-  const int nb_vals = 4 + (with_gradient && !variable ? r : 0);
+  Coefficients(x, coeff.data());
+  // Block partials: [sum g, sum g S_T, sum g S_B] and, in full mode, G_r (from totals[3]).
+  const int nb_vals = 3 + (with_gradient && !variable ? r : 0);
   const std::int64_t nblocks = (m + kEnergyBlock - 1) / kEnergyBlock;
   std::vector<double> partial(std::size_t(nblocks * nb_vals), 0.0);
+  std::vector<Fixed> block_energy(std::size_t(nblocks), 0);
+  std::vector<std::int64_t> block_nonfinite(std::size_t(nblocks), 0);
 
   // One block needs no threads (and a busy machine makes waking them costly).
 #pragma omp parallel if (nblocks > 1)
@@ -188,64 +251,71 @@ Evaluation<double> LogLinearEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMod
 #pragma omp for schedule(dynamic, 1)
     for (std::int64_t blk = 0; blk < nblocks; ++blk) {
       double* out = partial.data() + blk * nb_vals;
-      double* G = out + 4;
-      double energy = 0, sum_g = 0, sum_gt = 0, sum_gb = 0;
+      Fixed energy = 0;
+      std::int64_t nonfinite = 0;
       const std::int64_t end = std::min(m, (blk + 1) * kEnergyBlock);
       for (std::int64_t a = blk * kEnergyBlock; a < end; ++a) {
-        double L;
         const double* row = nullptr;
+        double L;
         if (variable) {
-          L = lnC + tau * s_top_[a] - beta * s_bottom_[a];
+          L = loglinear::VariableL(lnC, tau, beta, s_top_[a], s_bottom_[a]);
         } else {
-          if (storage_ == Storage::kDouble) {
-            row = d_double_.data() + std::size_t(a) * r;
-          } else {
-            if (storage_ == Storage::kFloat)
-              for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
-            else Row(a, buffer.data());
-            row = buffer.data();
+          row = RowOf(a, buffer.data());
+          L = lnC + loglinear::Dot(coeff.data(), row, r);
+          if (row_norm) {
+            double n2 = 1.0;
+#pragma omp simd reduction(+ : n2)
+            for (int j = 0; j < r; ++j) n2 += row[j] * row[j];
+            row_norm[a] = std::sqrt(n2);
           }
-          double s = 0;
-#pragma omp simd reduction(+ : s)
-          for (int j = 0; j < r; ++j) s += coeff[j] * row[j];
-          L = lnC + s;
         }
-        const double th = std::tanh(alpha * L);
-        const double W = weight_[a];
-        energy -= th * W;
-        if (!with_gradient) continue;
-        const double g = -alpha * W * (1.0 - th * th);
-        if (g == 0.0) continue;
-        sum_g += g;
-        if (variable) {
-          sum_gt += g * s_top_[a];
-          sum_gb += g * s_bottom_[a];
-        } else {
-#pragma omp simd
-          for (int j = 0; j < r; ++j) G[j] += g * row[j];
+        if (L_active) L_active[a] = L;
+        double g;
+        const double th = loglinear::Tanh(alpha, L, weight_[a], &g);
+        bool bad = false;
+        energy += loglinear::EnergyFixed(th, weight_[a], scale, &bad);
+        nonfinite += bad;
+        if (!with_gradient || g == 0.0) continue;
+        if (variable) loglinear::AccumulateVariable(g, s_top_[a], s_bottom_[a], out);
+        else {
+          out[0] += g;
+          loglinear::Axpy(g, row, out + 3, r);
         }
       }
-      out[0] = energy;
-      out[1] = sum_g;
-      out[2] = sum_gt;
-      out[3] = sum_gb;
+      block_energy[blk] = energy;
+      block_nonfinite[blk] = nonfinite;
     }
   }
 
   std::vector<double> total(std::size_t(nb_vals), 0.0);
-  for (std::int64_t b = 0; b < nblocks; ++b)
+  Fixed energy = 0;
+  std::int64_t nonfinite = 0;
+  for (std::int64_t b = 0; b < nblocks; ++b) {
     for (int k = 0; k < nb_vals; ++k) total[k] += partial[std::size_t(b * nb_vals + k)];
+    energy += block_energy[b];
+    nonfinite += block_nonfinite[b];
+  }
+  Evaluation<double> ev = Assemble(x, variable, with_gradient, energy, total.data(), nonfinite);
+  ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return ev;
+}
+
+Evaluation<double> LogLinearEnergy::Assemble(const Eigen::VectorXd& x, bool variable, bool with_gradient,
+                                             loglinear::Fixed energy, const double* total,
+                                             std::int64_t nonfinite) const {
   Evaluation<double> ev;
   const double inv_eta = 1.0 / eta_;
-  ev.energy = total[0] * inv_eta;
-  if (ng > 0) {
-    ev.gradient = Eigen::VectorXd::Zero(ng);
-    ev.gradient[0] = total[1] * inv_eta;
+  const int r = root_count();
+  ev.energy = nonfinite > 0 ? std::numeric_limits<double>::quiet_NaN() : double(energy) / energy_scale_ * inv_eta;
+  if (with_gradient) {
+    ev.gradient = Eigen::VectorXd::Zero(variable ? 3 : r + 3);
+    ev.gradient[0] = total[0] * inv_eta;
     if (variable) {
-      ev.gradient[1] = total[2] * inv_eta;
-      ev.gradient[2] = -total[3] * inv_eta;
+      ev.gradient[1] = total[1] * inv_eta;
+      ev.gradient[2] = -total[2] * inv_eta;
     } else {
-      const double* G = total.data() + 4;
+      const double* G = total + 3;
+      const double tau = x[1], beta = x[2];
       double d_tau = 0, d_beta = 0;
       for (int j = 0; j < nt_; ++j) {
         d_tau += x[3 + j] * G[j];
@@ -261,7 +331,7 @@ Evaluation<double> LogLinearEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMod
   }
   ev.counts.cells = total_cells_;
   ev.counts.singular = singular_;
-  ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ev.counts.overflowed = nonfinite;
   return ev;
 }
 

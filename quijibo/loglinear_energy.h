@@ -10,6 +10,9 @@
 // A V pass (only ln C, tau, beta move) needs two sums per cell, S_T and S_B, computed once by
 // BeginVariablePass; each evaluation is then O(cells), not O(cells x roots).
 //
+// The energy is summed exactly (loglinear_kernel.h), so psi does not depend on the order of the
+// cells; the narrow band (band_energy.h) reuses this class's matrix and arithmetic.
+//
 // Storage of D, chosen by measurement (docs/benchmarks.md):
 //   kDouble   precomputed, 8 bytes per cell and root (97^3 x 331: 2.4 GB), exact
 //   kFloat    precomputed, 4 bytes; ~1e-7 relative error in D (not exact, opt-in)
@@ -20,6 +23,7 @@
 #include <memory>
 
 #include "quijibo/energy.h"
+#include "quijibo/loglinear_kernel.h"
 
 namespace quijibo {
 
@@ -42,6 +46,10 @@ class LogLinearEnergy {
   // BeginVariablePass first and uses only x[0..2]; its gradient has 3 entries.
   Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode = EnergyMode::kFull,
                               bool with_gradient = true) const;
+  // Evaluate, also writing L of every active cell to L_active (if not null) and, in full mode,
+  // sqrt(1 + sum_r D_cr^2) to row_norm (if not null): what the narrow band's anchor needs.
+  Evaluation<double> EvaluateCapturing(const Eigen::VectorXd& x, EnergyMode mode, bool with_gradient,
+                                       double* L_active, double* row_norm) const;
   // Fixes the exponents T and B of x for the following kVariable evaluations: O(cells x roots).
   void BeginVariablePass(const Eigen::VectorXd& x);
 
@@ -55,12 +63,35 @@ class LogLinearEnergy {
   std::size_t matrix_bytes() const;
   double setup_seconds() const { return setup_seconds_; }
 
-  // log|q_c - root_r| for active cell c (floored at the singular-cell exclusion).
   int root_count() const { return nt_ + nb_; }
+  int top_count() const { return nt_; }
+
+  // What the narrow band (band_energy.h) reads. "Active" cells are the non-singular ones, in grid
+  // order; a = 0 .. active_count()-1.
+  std::int64_t active_count() const { return std::int64_t(cells_.size()); }
+  std::int64_t cell_of(std::int64_t a) const { return cells_[std::size_t(a)]; }
+  double weight(std::int64_t a) const { return weight_[std::size_t(a)]; }
+  double s_top(std::int64_t a) const { return s_top_[std::size_t(a)]; }
+  double s_bottom(std::int64_t a) const { return s_bottom_[std::size_t(a)]; }
+  double alpha() const { return options_.alpha; }
+  double energy_scale() const { return energy_scale_; }
+  // The D row of active cell a: a pointer into the matrix, or `buffer` (root_count() entries) filled.
+  const double* RowOf(std::int64_t a, double* buffer) const;
+  // Change counters: SetWeights and BeginVariablePass bump them (the band's cached state keys on them).
+  std::uint64_t weights_version() const { return weights_version_; }
+  std::uint64_t variable_version() const { return variable_version_; }
+  bool variable_ready() const { return s_top_.size() == cells_.size(); }
+  // coeff = [tau T, -beta B] of x.
+  void Coefficients(const Eigen::VectorXd& x, double* coeff) const;
+  void CheckX(const Eigen::VectorXd& x) const;
+  // The evaluation from its sums: energy (in 1/energy_scale units) and, per mode, totals =
+  // [sum g, sum g S_T, sum g S_B] (V pass) or [sum g, 0, 0, G_1..G_R] (full).
+  Evaluation<double> Assemble(const Eigen::VectorXd& x, bool variable, bool with_gradient,
+                              loglinear::Fixed energy, const double* totals, std::int64_t nonfinite) const;
 
  private:
   void Row(std::int64_t active, double* out) const;  // D row of an active cell
-  void CheckX(const Eigen::VectorXd& x) const;
+  void UpdateScale();
 
   int nt_ = 0, nb_ = 0;
   std::vector<Vec4> roots_;            // top then bottom
@@ -74,6 +105,8 @@ class LogLinearEnergy {
   std::vector<double> d_double_;
   std::vector<float> d_float_;
   std::vector<double> s_top_, s_bottom_;  // V-pass sums
+  double energy_scale_ = 1;
+  std::uint64_t weights_version_ = 0, variable_version_ = 0;
   double setup_seconds_ = 0;
 };
 

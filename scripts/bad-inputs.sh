@@ -56,7 +56,7 @@ printf 'this is not a mesh\n' > garbage.obj
 row "garbage mesh (found by the first stage)" garbage.json '{"target": {"mesh": "garbage.obj", "resolution": 16}}' "$Q" run garbage.json --out out
 row "no target" notarget.json '{"name": "x"}' "$Q" run notarget.json --out out
 row "two targets" two.json '{"target": {"analytic": "torus", "mesh": "a.obj"}}' "$Q" run two.json --out out
-row "long double with loglinear" prec.json "{$TORUS, \"optimizer\": {\"precision\": \"long-double\"}}" "$Q" run prec.json --out out
+row "long double with the band" prec.json "{$TORUS, \"optimizer\": {\"evaluator\": \"band\", \"precision\": \"long-double\"}}" "$Q" run prec.json --out out
 row "unknown method" method.json "{$TORUS, \"method\": \"quijbo\"}" "$Q" run method.json --out out
 row "section of another method" other.json "{$TORUS, \"modulus\": {}}" "$Q" run other.json --out out
 row "padding out of range" pad.json '{"target": {"analytic": "torus", "padding": 0.7}}' "$Q" run pad.json --out out

@@ -187,7 +187,8 @@ TEST(RunTest, BadExperimentsGiveOneClearLineAndNoResultsFolder) {
       {"missing-mesh", R"({"target": {"mesh": "no-such-mesh.obj"}})", "/target/mesh: no such file"},
       {"no-target", R"({"name": "x"})", "/target"},
       {"two-targets", R"({"target": {"analytic": "torus", "mesh": "a.obj"}})", "exactly one"},
-      {"precision", "{" + torus + R"(, "optimizer": {"precision": "long-double"}})", "/optimizer/precision"},
+      {"precision", "{" + torus + R"(, "optimizer": {"evaluator": "band", "precision": "long-double"}})",
+       "/optimizer/precision"},
       {"method", "{" + torus + R"(, "method": "quijbo"})", "/method"},
       {"padding", R"({"target": {"analytic": "torus", "padding": 0.7}})", "/target/padding"},
   };

@@ -1,0 +1,151 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "quijibo/band_energy.h"
+#include "quijibo/error.h"
+#include "quijibo/loglinear_energy.h"
+
+namespace quijibo {
+namespace {
+
+// A sphere target on an n^3 grid and a seeded random map centred on the grid (median L = 0).
+// Large exponents make L steep, as after an optimization: most cells saturate.
+struct Problem {
+  EnergyGrid grid;
+  RationalMap map;
+};
+
+Problem MakeProblem(int n, int top, int bottom, double emin, double emax, std::uint64_t seed) {
+  Problem p;
+  const ScalarGrid sdf = AnalyticTarget("sphere:radius=1", GridFrame::Cube(n, {0.01, -0.02, 0.03}, 3.0));
+  p.grid = MakeEnergyGrid(sdf, WeightField::kBalanced);
+  RandomMapOptions o;
+  o.top = top;
+  o.bottom = bottom;
+  o.exponent_min = emin;
+  o.exponent_max = emax;
+  o.root_radius = 1.2;
+  o.seed = seed;
+  p.map = RandomMap(o);
+  p.map.tau = 0.9;
+  p.map.beta = 1.1;
+  p.map.ln_C = -MedianLogModulus(p.map, p.grid);
+  return p;
+}
+
+double Relative(double a, double b) { return std::fabs(a - b) / std::max(1e-300, std::fabs(b)); }
+
+// Band and dense agree (the design makes them bit-identical; the requirement is 1e-12).
+void ExpectSame(const Evaluation<double>& band, const Evaluation<double>& dense, const std::string& what) {
+  EXPECT_LE(Relative(band.energy, dense.energy), 1e-12) << what;
+  EXPECT_EQ(band.energy, dense.energy) << what;
+  ASSERT_EQ(band.gradient.size(), dense.gradient.size()) << what;
+  const double scale = dense.gradient.cwiseAbs().maxCoeff();
+  for (Eigen::Index k = 0; k < dense.gradient.size(); ++k) {
+    EXPECT_LE(std::fabs(band.gradient[k] - dense.gradient[k]), 1e-12 * scale) << what << " component " << k;
+    EXPECT_EQ(band.gradient[k], dense.gradient[k]) << what << " component " << k;
+  }
+}
+
+TEST(BandEnergyTest, SaturatedTanhIsExactlyOne) {
+  // The band's premise: beyond |alpha L| = 19.07 tanh is +-1 in double; kBandSaturation leaves room.
+  EXPECT_EQ(std::tanh(19.1), 1.0);
+  EXPECT_EQ(std::tanh(-19.1), -1.0);
+  EXPECT_LT(std::tanh(18.0), 1.0);
+  EXPECT_GE(kBandSaturation, 19.1);
+}
+
+TEST(BandEnergyTest, MatchesDenseOnRandomMaps) {
+  for (auto storage : {LogLinearOptions::Storage::kDouble, LogLinearOptions::Storage::kOnTheFly}) {
+    for (std::uint64_t seed : {1, 2}) {
+      const Problem p = MakeProblem(18, 9, 7, 0.5, 3.0, seed);
+      LogLinearOptions lo;
+      lo.storage = storage;
+      const LogLinearEnergy dense(p.map, p.grid, {}, lo);
+      BandEnergy band(&dense);
+      const Eigen::VectorXd x = p.map.variables();
+      ExpectSame(band.Evaluate(x), dense.Evaluate(x), "random map");
+      EXPECT_EQ(band.Evaluate(x, EnergyMode::kFull, false).energy, dense.Evaluate(x, EnergyMode::kFull, false).energy);
+    }
+  }
+}
+
+TEST(BandEnergyTest, MatchesDenseAlongMovesThatForceRefreshes) {
+  const Problem p = MakeProblem(24, 12, 10, 4.0, 12.0, 7);
+  LogLinearEnergy dense(p.map, p.grid);
+  BandEnergy band(&dense);
+  Eigen::VectorXd x = p.map.variables();
+  ExpectSame(band.Evaluate(x), dense.Evaluate(x), "start");
+  const BandStats first = band.stats();
+  EXPECT_EQ(first.anchors, 1);
+  // Steep L: a minority of the cells is unsaturated (27 % here).
+  EXPECT_LT(first.band_cells, first.cells / 2);
+  EXPECT_GT(first.band_cells, 0);
+  // Small seeded moves of every variable: the list covers them without a new anchor at first.
+  std::uint64_t state = 12345;
+  auto uniform = [&] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return double(state >> 11) * 0x1p-53 - 0.5;
+  };
+  for (int step = 0; step < 40; ++step) {
+    Eigen::VectorXd y = x;
+    for (Eigen::Index k = 0; k < y.size(); ++k) y[k] = std::max(0.0, y[k] + 0.002 * (step + 1) * uniform());
+    y[0] = x[0] + 0.01 * step * uniform();
+    ExpectSame(band.Evaluate(y), dense.Evaluate(y), "step " + std::to_string(step));
+  }
+  EXPECT_GT(band.stats().max_exact, first.band_cells);  // cells beyond the band were evaluated
+  EXPECT_LT(band.stats().max_exact, first.cells);
+  EXPECT_LT(band.stats().work_fraction(), 1.0);
+  // ln C moves by 3: the level set moves through cells that were deep in saturation. A refresh
+  // must notice, else the energies would differ.
+  const long long sweeps = band.stats().sweeps();
+  Eigen::VectorXd far = x;
+  far[0] += 3.0;
+  const auto dense_far = dense.Evaluate(far);
+  ExpectSame(band.Evaluate(far), dense_far, "ln C + 3");
+  EXPECT_GT(band.stats().sweeps(), sweeps);
+  EXPECT_GT(std::fabs(dense_far.energy - dense.Evaluate(x).energy), 1e-3);  // the move mattered
+  // Exponents doubled, then back: more sweeps, still identical.
+  Eigen::VectorXd twice = x;
+  twice.tail(twice.size() - 3) *= 2.0;
+  ExpectSame(band.Evaluate(twice), dense.Evaluate(twice), "exponents x2");
+  ExpectSame(band.Evaluate(x), dense.Evaluate(x), "back");
+  // New weights (an R pass) keep the anchor but change the constants.
+  std::vector<double> w = p.grid.weight;
+  for (std::size_t c = 0; c < w.size(); ++c) w[c] *= 1.0 + 0.5 * std::sin(double(c));
+  double eta = 0;
+  for (double v : w) eta += std::fabs(v);
+  dense.SetWeights(w, eta);
+  ExpectSame(band.Evaluate(x), dense.Evaluate(x), "reweighted");
+  EXPECT_EQ(band.stats().dense_fallbacks, 0);
+}
+
+TEST(BandEnergyTest, VariablePassMatchesDense) {
+  const Problem p = MakeProblem(20, 10, 8, 3.0, 9.0, 11);
+  LogLinearEnergy dense(p.map, p.grid);
+  BandEnergy band(&dense);
+  const Eigen::VectorXd x = p.map.variables();
+  EXPECT_THROW(band.Evaluate(x, EnergyMode::kVariable), Error);
+  dense.BeginVariablePass(x);
+  for (int step = 0; step < 12; ++step) {
+    Eigen::VectorXd y = x;
+    y[0] += 0.05 * step * (step % 2 ? -1 : 1);
+    y[1] *= 1.0 + 0.02 * step;
+    y[2] *= 1.0 - 0.01 * step;
+    ExpectSame(band.Evaluate(y, EnergyMode::kVariable), dense.Evaluate(y, EnergyMode::kVariable),
+               "V step " + std::to_string(step));
+  }
+  Eigen::VectorXd far = x;
+  far[0] -= 2.5;
+  ExpectSame(band.Evaluate(far, EnergyMode::kVariable), dense.Evaluate(far, EnergyMode::kVariable), "V far");
+  // A new V pass (other exponents) re-anchors; then a full evaluation switches mode.
+  Eigen::VectorXd z = x;
+  z.tail(z.size() - 3) *= 1.3;
+  dense.BeginVariablePass(z);
+  ExpectSame(band.Evaluate(z, EnergyMode::kVariable), dense.Evaluate(z, EnergyMode::kVariable), "new V pass");
+  ExpectSame(band.Evaluate(z), dense.Evaluate(z), "full after V");
+}
+
+}  // namespace
+}  // namespace quijibo

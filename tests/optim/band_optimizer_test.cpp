@@ -1,0 +1,80 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "optim/optimizer.h"
+#include "quijibo/error.h"
+
+namespace quijibo {
+namespace {
+
+std::string BandTempDir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / ("quijibo_band_" + name);
+  std::filesystem::remove_all(d);
+  return d.string();
+}
+
+// The same schedule with the narrow band and with the dense evaluator: the band's energy and
+// gradient equal the dense ones, so every pass ends at the same psi (the requirement: 1e-9).
+TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
+  const ScalarGrid sdf = AnalyticTarget("torus", GridFrame::Cube(24, {0, 0, 0}, 3.0));
+  RandomMapOptions ro;
+  ro.top = 12;
+  ro.bottom = 9;
+  ro.seed = 3;
+  ro.exponent_min = 2.0;
+  ro.exponent_max = 6.0;
+  RationalMap start = RandomMap(ro);
+  start.ln_C = -MedianLogModulus(start, MakeEnergyGrid(sdf, WeightField::kLayer));
+  OptimizeSummary s[2];
+  RationalMap result[2];
+  const char* names[2] = {"band", "dense"};
+  std::string dirs[2];
+  for (int k = 0; k < 2; ++k) {
+    OptimizeOptions o;
+    o.schedule = Schedule::Parse("12(VFRF)24(VF)");
+    for (auto& l : o.schedule.levels)
+      for (auto& p : l.passes) p.max_iterations = 30;
+    o.evaluator = names[k];
+    o.out_dir = dirs[k] = BandTempDir(names[k]);
+    result[k] = start;
+    s[k] = Optimize(sdf, result[k], o);
+    ASSERT_TRUE(s[k].complete);
+  }
+  ASSERT_EQ(s[0].passes.size(), s[1].passes.size());
+  EXPECT_LT(s[0].absolute_end, s[0].absolute_start - 0.05);
+  for (std::size_t p = 0; p < s[0].passes.size(); ++p) {
+    const PassSummary &band = s[0].passes[p], &dense = s[1].passes[p];
+    EXPECT_NEAR(band.absolute_end, dense.absolute_end, 1e-9 * std::fabs(dense.absolute_end)) << p;
+    EXPECT_NEAR(band.energy_end, dense.energy_end, 1e-9 * std::fabs(dense.energy_end)) << p;
+    EXPECT_EQ(band.iterations, dense.iterations) << p;
+    // The band reports itself; the dense run does not.
+    ASSERT_TRUE(band.band.is_object()) << p;
+    EXPECT_TRUE(dense.band.is_null()) << p;
+    EXPECT_LE(band.band["energy_error"].get<double>(), 1e-12) << p;
+    EXPECT_GE(band.band["anchors"].get<long long>(), 1) << p;
+    EXPECT_LE(band.band["mean_fraction"].get<double>(), 1.0) << p;
+  }
+  EXPECT_EQ(result[0].variables(), result[1].variables());
+  // The summary and the pass-end log lines carry the band's statistics.
+  const auto summary = nlohmann::json::parse(std::ifstream(dirs[0] + "/summary.json"));
+  EXPECT_TRUE(summary["passes"][0]["band"].contains("energy_error"));
+  for (const std::string& d : dirs) std::filesystem::remove_all(d);
+}
+
+TEST(BandOptimizerTest, EvaluatorNamesResolve) {
+  EXPECT_EQ(ResolveEvaluator("auto", Precision::kDouble), "band");
+  EXPECT_EQ(ResolveEvaluator("auto", Precision::kLongDouble), "cached");
+  EXPECT_EQ(ResolveEvaluator("loglinear", Precision::kDouble), "dense");
+  EXPECT_THROW(ResolveEvaluator("fast", Precision::kDouble), Error);
+  OptimizeOptions o;
+  o.schedule = Schedule::Parse("8(V)");
+  o.out_dir = "x";
+  o.evaluator = "band";
+  o.precision = Precision::kLongDouble;
+  EXPECT_NE(o.validate().find("double only"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace quijibo
