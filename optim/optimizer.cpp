@@ -4,10 +4,12 @@
 #include <csignal>
 #include <cstring>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <unistd.h>
 
 #include "optim/ceres_backend.h"
 #include "optim/lbfgsb.h"
@@ -130,6 +132,18 @@ std::string OptimizeSummary::Report() const {
 }
 
 namespace {
+
+// For kill-and-resume tests that do not depend on timing: QUIJIBO_TEST_EXIT_AFTER_STEP=k ends the
+// process at once (_exit, as a crash: no summary, no destructors) right after step k is logged and,
+// when k is a checkpoint, checkpointed. Steps count iterations over the whole run from 1.
+constexpr int kTestExitCode = 86;
+long long TestExitStep() {
+  static const long long step = [] {
+    const char* s = std::getenv("QUIJIBO_TEST_EXIT_AFTER_STEP");
+    return s && *s ? std::atoll(s) : -1;
+  }();
+  return step;
+}
 
 volatile std::sig_atomic_t g_interrupted = 0;
 extern "C" void OnSignal(int) { g_interrupted = 1; }
@@ -406,7 +420,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       };
       Progress progress("level " + std::to_string(level.resolution) + " pass " + std::string(1, char(spec.kind)),
                         spec.max_iterations, false);
-      auto callback = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
+      auto iterate = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
         ++step;
         json line = where;
         line["type"] = "iteration";
@@ -442,6 +456,11 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
           return IterationAction::kRestartMemory;
         }
         return IterationAction::kContinue;
+      };
+      auto callback = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
+        const IterationAction a = iterate(it, evals, fx, pg);
+        if (step == TestExitStep()) _exit(kTestExitCode);  // a crash after this step's log and checkpoint
+        return a;
       };
       LbfgsbOptions<Scalar> lo;
       lo.memory = o.memory;
