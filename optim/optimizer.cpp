@@ -247,6 +247,10 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   // The result: the lowest absolute energy seen at the start and at pass ends.
   Vector best_x = x;
   double best_absolute = 0;
+  // The pass in progress at a checkpoint: its start energy and evaluations so far, so that a
+  // resumed pass reports what the uninterrupted one does.
+  double pass_energy_start = 0;
+  int pass_evaluations = 0;
   if (o.resume) {
     const std::string text = ReadFile(paths.checkpoint);
     const json c = ParseJson(text, paths.checkpoint);
@@ -261,6 +265,8 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     step = r.integer("/step");
     elapsed_before = r.number("/elapsed_seconds");
     summary.absolute_start = r.number("/absolute_start");
+    pass_energy_start = c.value("pass_energy_start", 0.0);
+    pass_evaluations = c.value("pass_evaluations", 0);
     auto read_vec = [&](const char* key) {
       const json& a = c.at(key);
       Vector v(Eigen::Index(a.size()));
@@ -339,6 +345,8 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     c["log_bytes"] = (long long)fs::file_size(paths.log);
     c["elapsed_seconds"] = elapsed();
     c["absolute_start"] = summary.absolute_start;
+    c["pass_energy_start"] = pass_energy_start;
+    c["pass_evaluations"] = pass_evaluations;
     json xv = json::array(), pv = json::array();
     for (Eigen::Index k = 0; k < xs.size(); ++k) xv.push_back(Exact(xs[k]));
     for (Eigen::Index k = 0; k < pass_start.size(); ++k) pv.push_back(Exact(pass_start[k]));
@@ -409,6 +417,9 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       ps.pass_index = pj;
       ps.kind = char(spec.kind);
       bool first_eval = true;
+      // A resumed pass evaluates its start point once more than the uninterrupted one did.
+      const int evaluation_offset = resumed_mid_pass ? pass_evaluations - 1 : 0;
+      if (resumed_mid_pass) ps.energy_start = pass_energy_start, first_eval = false;
       Vector full = x;
       auto f = [&](const Vector& y, Vector& g) -> Scalar {
         full.head(na) = y;
@@ -422,11 +433,13 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
                         spec.max_iterations, false);
       auto iterate = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
         ++step;
+        pass_energy_start = ps.energy_start;
+        pass_evaluations = evals + evaluation_offset;
         json line = where;
         line["type"] = "iteration";
         line["step"] = step;
         line["iteration"] = it;
-        line["evaluations"] = evals;
+        line["evaluations"] = pass_evaluations;
         line["energy"] = ToDouble(fx);
         line["projected_gradient"] = ToDouble(pg);
         emit(line);
@@ -485,7 +498,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       ps.message = res.message;
       ps.line_search_restarts = res.line_search_restarts;
       ps.iterations = res.iterations;
-      ps.evaluations = res.evaluations;
+      ps.evaluations = res.evaluations + evaluation_offset;
       ps.energy_end = ToDouble(res.f);
       ps.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_t0).count();
       ps.absolute_end = absolute_energy(x);
