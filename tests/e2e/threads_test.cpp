@@ -57,7 +57,7 @@ TEST(ThreadCount, OptimizeIsTheSame) {
             0);
   // A few hundred iterations with the default (log-linear) evaluator, fewer with the cached one.
   ExpectSameWithOneAndTwoThreads("loglinear", "optimize -t torus --target-resolution 24 -m " + map +
-                                                  " -s '12(VFRF)24(VF)' --max-v 50 --max-f 120 --max-r 40 -o OUT/o");
+                                                  " -s '12(VFRF)24(VF)' --weights layer --max-v 60 --max-f 120 --max-r 40 -o OUT/o");
   ExpectSameWithOneAndTwoThreads("cached", "optimize -t torus --target-resolution 24 -m " + map +
                                                " -s '12(VF)' --max-f 40 -e cached -o OUT/o");
   fs::remove_all(dir);
