@@ -5,10 +5,12 @@
 #include <csignal>
 #include <cstring>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <unistd.h>
 
 #include "optim/ceres_backend.h"
 #include "optim/lbfgsb.h"
@@ -163,6 +165,18 @@ std::string OptimizeSummary::Report() const {
 
 namespace {
 
+// For kill-and-resume tests that do not depend on timing: QUIJIBO_TEST_EXIT_AFTER_STEP=k ends the
+// process at once (_exit, as a crash: no summary, no destructors) right after step k is logged and,
+// when k is a checkpoint, checkpointed. Steps count iterations over the whole run from 1.
+constexpr int kTestExitCode = 86;
+long long TestExitStep() {
+  static const long long step = [] {
+    const char* s = std::getenv("QUIJIBO_TEST_EXIT_AFTER_STEP");
+    return s && *s ? std::atoll(s) : -1;
+  }();
+  return step;
+}
+
 volatile std::sig_atomic_t g_interrupted = 0;
 extern "C" void OnSignal(int) { g_interrupted = 1; }
 
@@ -299,6 +313,10 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   // The result: the lowest absolute energy seen at the start and at pass ends.
   Vector best_x = x;
   double best_absolute = 0;
+  // The pass in progress at a checkpoint: its start energy and evaluations so far, so that a
+  // resumed pass reports what the uninterrupted one does.
+  double pass_energy_start = 0;
+  int pass_evaluations = 0;
   if (o.resume) {
     const std::string text = ReadFile(paths.checkpoint);
     const json c = ParseJson(text, paths.checkpoint);
@@ -313,6 +331,8 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     step = r.integer("/step");
     elapsed_before = r.number("/elapsed_seconds");
     summary.absolute_start = r.number("/absolute_start");
+    pass_energy_start = c.value("pass_energy_start", 0.0);
+    pass_evaluations = c.value("pass_evaluations", 0);
     auto read_vec = [&](const char* key) {
       const json& a = c.at(key);
       Vector v(Eigen::Index(a.size()));
@@ -391,6 +411,8 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     c["log_bytes"] = (long long)fs::file_size(paths.log);
     c["elapsed_seconds"] = elapsed();
     c["absolute_start"] = summary.absolute_start;
+    c["pass_energy_start"] = pass_energy_start;
+    c["pass_evaluations"] = pass_evaluations;
     json xv = json::array(), pv = json::array();
     for (Eigen::Index k = 0; k < xs.size(); ++k) xv.push_back(Exact(xs[k]));
     for (Eigen::Index k = 0; k < pass_start.size(); ++k) pv.push_back(Exact(pass_start[k]));
@@ -470,6 +492,9 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       ps.pass_index = pj;
       ps.kind = char(spec.kind);
       bool first_eval = true;
+      // A resumed pass evaluates its start point once more than the uninterrupted one did.
+      const int evaluation_offset = resumed_mid_pass ? pass_evaluations - 1 : 0;
+      if (resumed_mid_pass) ps.energy_start = pass_energy_start, first_eval = false;
       Vector full = x;
       auto f = [&](const Vector& y, Vector& g) -> Scalar {
         full.head(na) = y;
@@ -481,13 +506,15 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       };
       Progress progress("level " + std::to_string(level.resolution) + " pass " + std::string(1, char(spec.kind)),
                         spec.max_iterations, false);
-      auto callback = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
+      auto iterate = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
         ++step;
+        pass_energy_start = ps.energy_start;
+        pass_evaluations = evals + evaluation_offset;
         json line = where;
         line["type"] = "iteration";
         line["step"] = step;
         line["iteration"] = it;
-        line["evaluations"] = evals;
+        line["evaluations"] = pass_evaluations;
         line["energy"] = ToDouble(fx);
         line["projected_gradient"] = ToDouble(pg);
         emit(line);
@@ -518,6 +545,11 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
         }
         return IterationAction::kContinue;
       };
+      auto callback = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
+        const IterationAction a = iterate(it, evals, fx, pg);
+        if (step == TestExitStep()) _exit(kTestExitCode);  // a crash after this step's log and checkpoint
+        return a;
+      };
       LbfgsbOptions<Scalar> lo;
       lo.memory = o.memory;
       lo.max_iterations = spec.max_iterations;
@@ -541,7 +573,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       ps.message = res.message;
       ps.line_search_restarts = res.line_search_restarts;
       ps.iterations = res.iterations;
-      ps.evaluations = res.evaluations;
+      ps.evaluations = res.evaluations + evaluation_offset;
       ps.energy_end = ToDouble(res.f);
       // Before absolute_energy, which changes a shared evaluator's weights.
       ps.band = objective->PassReport(x, mode, res.f);

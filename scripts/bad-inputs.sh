@@ -1,19 +1,27 @@
 #!/usr/bin/env bash
 # Regenerates docs/bad-inputs.md: runs bad inputs through the commands and records the exact
 # message and exit code of each. Usage: scripts/bad-inputs.sh [path/to/quijibo] > docs/bad-inputs.md
+# Every command runs with --quiet (no progress lines), so a row shows the one line a user sees.
+# The read-only folder is a folder without write permission; as root (who ignores permissions)
+# that row runs as the user nobody (setpriv).
 set -uo pipefail
 Q=$(realpath "${1:-build/experiments/quijibo}")
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
+chmod 755 "$T"  # the read-only row may run as another user
+trap 'chmod -R u+w "$T"; rm -rf "$T"' EXIT
 cd "$T"
 TORUS='"target": {"analytic": "torus", "resolution": 20}'
 row() {  # description, file name, file content ('' = no file), command...
   local what=$1 name=$2 content=$3
   shift 3
   [ -n "$content" ] && printf '%s\n' "$content" > "$name"
-  local msg rc
-  "$@" >/dev/null 2>"$T/.stderr"; rc=$?
+  local msg rc args=()
+  for a in "$@"; do  # quijibo --quiet ...
+    args+=("$a")
+    [ "$a" = "$Q" ] && args+=(--quiet)
+  done
+  "${args[@]}" >/dev/null 2>"$T/.stderr"; rc=$?
   msg=$(sed 's#'"$T"'/##g; s#'"$ROOT"'/##g' "$T/.stderr" | tr '\n' ' ' | sed 's/ *$//')
   local shown=${content:-(none)}
   printf '| %s | `%s` | %s | `%s` |\n' "$what" "$(echo "$shown" | sed 's/|/\\|/g')" "$rc" "$(echo "$msg" | sed 's/|/\\|/g')"
@@ -63,7 +71,10 @@ row "padding out of range" pad.json '{"target": {"analytic": "torus", "padding":
 row "duplicate optimizer names" dup.json "{$TORUS, \"optimizer\": [{\"name\": \"a\"}, {\"name\": \"a\"}]}" "$Q" run dup.json --out out
 row "monopoles without a mesh" mono.json "{$TORUS, \"initial\": {\"kind\": \"monopoles\"}}" "$Q" run mono.json --out out
 printf '{%s}\n' "$TORUS" > ok.json
-row "read-only results folder" ok.json "" "$Q" run ok.json --out /proc/sys/quijibo-results
+mkdir -p locked && chmod 555 locked
+AS_USER=()
+[ "$(id -u)" = 0 ] && AS_USER=(setpriv --reuid=nobody --regid=nogroup --clear-groups)
+row "read-only results folder" ok.json "" "${AS_USER[@]}" "$Q" run ok.json --out locked/results
 row "results path is a file" ok.json "" "$Q" run ok.json --out ok.json
 # A full disk: a 96 KiB tmpfs (needs root), else a file-size limit (ulimit -f), which fails writes
 # the same way (EFBIG instead of ENOSPC).
@@ -72,7 +83,7 @@ if mount -t tmpfs -o size=96k tmpfs disk 2>/dev/null; then
   row "full disk (96 KiB tmpfs)" ok.json "" "$Q" run ok.json --out disk/results
   umount disk
 else
-  row "file-size limit (ulimit -f 24)" ok.json "" sh -c "ulimit -f 24; exec \"$Q\" run ok.json --out disk/results"
+  row "file-size limit (ulimit -f 24)" ok.json "" sh -c "ulimit -f 24; exec \"$Q\" --quiet run ok.json --out disk/results"
 fi
 printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\n' > open-box.obj
 row "mesh with a large hole (a box without its lid)" holes.json '{"target": {"mesh": "open-box.obj", "resolution": 16}}' "$Q" run holes.json --out out

@@ -7,7 +7,7 @@ PACKAGES=(
   libboost-dev libboost-iostreams-dev
   libopenvdb-dev libtbb-dev
   nlohmann-json3-dev libcli11-dev libpng-dev
-  libgtest-dev libbenchmark-dev
+  libgtest-dev
   gnuplot-nox
   libassimp-dev
   mpi-default-dev mpi-default-bin

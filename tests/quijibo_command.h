@@ -12,8 +12,9 @@ struct CommandResult {
   std::string out;  // stdout and stderr together
 };
 
-inline CommandResult RunQuijibo(const std::string& args) {
-  const std::string cmd = std::string(QUIJIBO_BINARY) + " --quiet " + args + " 2>&1";
+// `env` ("NAME=value ...", shell words) is set for this command only.
+inline CommandResult RunQuijibo(const std::string& args, const std::string& env = "") {
+  const std::string cmd = (env.empty() ? "" : "env " + env + " ") + std::string(QUIJIBO_BINARY) + " --quiet " + args + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   if (!p) return {-1, "popen failed"};
   std::string out;

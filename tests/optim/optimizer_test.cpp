@@ -1,20 +1,10 @@
 #include <gtest/gtest.h>
 
-#include <cstdio>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <fcntl.h>
-
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <sstream>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <thread>
 
 #include "optim/ceres_backend.h"
 #include "optim/lbfgsb.h"
@@ -23,8 +13,7 @@
 #include "optim/schedule.h"
 #include "quijibo/error.h"
 #include "quijibo/json_reader.h"
-
-extern char** environ;
+#include "optim/small_run.h"
 
 namespace quijibo {
 namespace {
@@ -191,20 +180,6 @@ TEST(ReweightTest, TotalsFollowTheReferenceRule) {
   EXPECT_GT(n.well_captured, 0);
 }
 
-struct SmallRun {
-  ScalarGrid sdf;
-  RationalMap map;
-  SmallRun() {
-    sdf = AnalyticTarget("torus", GridFrame::Cube(20, {0, 0, 0}, 3.0));
-    RandomMapOptions o;
-    o.top = 12;
-    o.bottom = 9;
-    o.seed = 3;
-    map = RandomMap(o);
-    map.ln_C = -MedianLogModulus(map, MakeEnergyGrid(sdf, WeightField::kLayer));
-  }
-};
-
 std::string TempDir(const std::string& name) {
   const auto d = std::filesystem::temp_directory_path() / ("quijibo_optim_" + name);
   std::filesystem::remove_all(d);
@@ -333,92 +308,6 @@ TEST(OptimizerTest, RunsEndToEndInLongDoubleWithTheCachedEvaluator) {
   EXPECT_TRUE(s.complete);
   EXPECT_LT(s.absolute_end, s.absolute_start);
   std::filesystem::remove_all(o.out_dir);
-}
-
-// The command, killed with SIGKILL mid-run and resumed, ends where an uninterrupted run ends.
-std::string Slurp(const std::string& p) {
-  std::ifstream in(p);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
-}
-
-int RunQuijibo(const std::vector<std::string>& args, pid_t* background = nullptr) {
-  std::vector<std::string> all = {QUIJIBO_BINARY, "--quiet"};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-  pid_t pid;
-  posix_spawn(&pid, QUIJIBO_BINARY, &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (background) {
-    *background = pid;
-    return 0;
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-TEST(OptimizerTest, KilledAndResumedRunMatchesAnUninterruptedOne) {
-  const std::string dir = TempDir("kill");
-  std::filesystem::create_directories(dir);
-  const std::string map = dir + "/init.json";
-  ASSERT_EQ(RunQuijibo({"map", "random", "--top", "40", "--bottom", "30", "--seed", "5", "--center-on", "torus",
-                        "--target-resolution", "24", "-o", map}),
-            0);
-  const std::vector<std::string> common = {"optimize", "-t", "torus", "--target-resolution", "24", "-m", map,
-                                           "-s", "12(VF)24(VRF)", "--max-f", "60", "--max-r", "30",
-                                           "--checkpoint-every", "7", "--weights", "layer"};
-  auto with_out = [&](const std::string& out, bool resume) {
-    auto a = common;
-    a.push_back("-o");
-    a.push_back(out);
-    if (resume) a.push_back("--resume");
-    return a;
-  };
-  ASSERT_EQ(RunQuijibo(with_out(dir + "/whole", false)), 0);
-
-  pid_t pid;
-  RunQuijibo(with_out(dir + "/killed", false), &pid);
-  // Kill once the run is well into its passes (the log grows by one line per iteration).
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  bool killed = false;
-  while (std::chrono::steady_clock::now() < deadline) {
-    int status;
-    if (waitpid(pid, &status, WNOHANG) == pid) break;  // finished before we could kill it
-    const std::string log = Slurp(dir + "/killed/log.jsonl");
-    if (std::count(log.begin(), log.end(), '\n') > 90) {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      killed = true;
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  EXPECT_TRUE(killed) << "the run finished before it could be killed: the test proves less";
-  ASSERT_EQ(RunQuijibo(with_out(dir + "/killed", true)), 0);
-  const auto whole = nlohmann::json::parse(Slurp(dir + "/whole/map.json"));
-  const auto resumed = nlohmann::json::parse(Slurp(dir + "/killed/map.json"));
-  EXPECT_EQ(whole["top"], resumed["top"]);
-  EXPECT_EQ(whole["bottom"], resumed["bottom"]);
-  EXPECT_EQ(whole["ln_C"], resumed["ln_C"]);
-  EXPECT_EQ(whole["tau"], resumed["tau"]);
-  EXPECT_EQ(whole["beta"], resumed["beta"]);
-  // The resumed log has the same iterations, none twice.
-  auto iterations = [](const std::string& text) {
-    std::vector<std::pair<long long, double>> v;
-    std::istringstream in(text);
-    for (std::string line; std::getline(in, line);) {
-      const auto j = nlohmann::json::parse(line);
-      if (j["type"] == "iteration") v.emplace_back(j["step"].get<long long>(), j["energy"].get<double>());
-    }
-    return v;
-  };
-  EXPECT_EQ(iterations(Slurp(dir + "/whole/log.jsonl")), iterations(Slurp(dir + "/killed/log.jsonl")));
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
