@@ -18,10 +18,11 @@ inline std::string SlurpFile(const std::string& p) {
 }
 
 // A key that holds a time, or a size that depends on one (a log's byte count, whose "seconds"
-// digits vary), or the thread count.
+// digits vary), or the thread count, or the narrow band's work counters (a resumed process
+// re-anchors its band, so it counts other work for the same energies).
 inline bool IsClockKey(const std::string& k) {
   return k == "seconds" || k.ends_with("_seconds") || k.starts_with("seconds_") || k == "log_bytes" ||
-         k == "threads" || k == "date";
+         k == "threads" || k == "date" || k == "band";
 }
 
 // `j` without clock keys, at any depth.
