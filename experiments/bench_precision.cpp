@@ -5,9 +5,6 @@
 // Each case runs in a child process (`quijibo bench precision-case ...`) so that its peak
 // memory is its own (wait4's ru_maxrss) and a case that runs out of memory cannot take the
 // table down with it.
-#include <spawn.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -19,13 +16,12 @@
 #include <sstream>
 
 #include "experiments/cli.h"
+#include "quijibo/child_process.h"
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
 #include "quijibo/progress.h"
 #include "quijibo/rational_map.h"
 #include "quijibo/target.h"
-
-extern char** environ;
 
 namespace quijibo::cli {
 
@@ -76,7 +72,7 @@ void RunCase(const CaseSpec& s) {
   WriteOutput("", r.dump() + "\n");
 }
 
-struct ChildResult {
+struct CaseResult {
   bool ok = false;
   json report;
   std::string error;
@@ -84,53 +80,35 @@ struct ChildResult {
   double wall = 0;
 };
 
-ChildResult Spawn(const CaseSpec& s) {
-  std::vector<std::string> args = {"quijibo",    "--quiet",       "bench",
-                                   "precision-case", "--roots",   std::to_string(s.roots),
-                                   "--grid",     std::to_string(s.grid), "--evaluator",
-                                   s.evaluator,  "--precision",   s.precision,
-                                   "--storage",  s.storage,       "--repeats",
-                                   std::to_string(s.repeats), "--seed", std::to_string(s.seed),
-                                   "--exponent-min", std::to_string(s.exponent_min),
-                                   "--exponent-max", std::to_string(s.exponent_max)};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  int out_pipe[2];
-  if (::pipe(out_pipe) != 0) throw Error("bench: cannot create a pipe");
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_adddup2(&fa, out_pipe[1], STDOUT_FILENO);
-  posix_spawn_file_actions_addclose(&fa, out_pipe[0]);
-  pid_t pid;
-  const auto start = std::chrono::steady_clock::now();
-  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  ::close(out_pipe[1]);
-  if (rc != 0) {
-    ::close(out_pipe[0]);
+// One case in a child process of this executable: its peak memory is its own.
+CaseResult Spawn(const CaseSpec& s) {
+  ChildOptions c;
+  c.program = SelfExecutable();
+  c.argv0 = "quijibo";
+  c.args = {"--quiet", "bench", "precision-case", "--roots", std::to_string(s.roots), "--grid", std::to_string(s.grid),
+            "--evaluator", s.evaluator, "--precision", s.precision, "--storage", s.storage, "--repeats",
+            std::to_string(s.repeats), "--seed", std::to_string(s.seed), "--exponent-min",
+            std::to_string(s.exponent_min), "--exponent-max", std::to_string(s.exponent_max)};
+  c.stdin_path = "";
+  c.capture_stdout = true;
+  ChildResult child;
+  try {
+    child = RunChild(c);
+  } catch (const Error&) {
     throw Error("bench: cannot start a case process");
   }
-  std::string text;
-  char buf[65536];
-  for (ssize_t n; (n = ::read(out_pipe[0], buf, sizeof buf)) > 0;) text.append(buf, std::size_t(n));
-  ::close(out_pipe[0]);
-  int status = 0;
-  struct rusage ru {};
-  ::wait4(pid, &status, 0, &ru);
-  ChildResult r;
-  r.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  r.peak_mb = double(ru.ru_maxrss) / 1024.0;
-  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+  CaseResult r;
+  r.wall = child.wall_seconds;
+  r.peak_mb = child.peak_rss_mb;
+  if (child.ok()) {
     try {
-      r.report = json::parse(text);
+      r.report = json::parse(child.out);
       r.ok = true;
-    } catch (const std::exception& e) {
+    } catch (const std::exception&) {
       r.error = "unreadable case output";
     }
   } else {
-    r.error = WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
-                                  : "exit code " + std::to_string(WEXITSTATUS(status));
+    r.error = child.Describe();
   }
   return r;
 }
@@ -242,7 +220,7 @@ void AddBenchCommand(CLI::App& app) {
             s.seed = a->seed;
             s.exponent_min = a->exponent_min;
             s.exponent_max = a->exponent_max;
-            const ChildResult res = Spawn(s);
+            const CaseResult res = Spawn(s);
             if (!res.ok) {
               row["skipped"] = "case failed: " + res.error;
             } else {

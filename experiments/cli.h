@@ -6,6 +6,7 @@
 #include <functional>
 #include <string>
 
+#include "experiments/pipeline/mesh.h"
 #include "mesh/julia_field.h"
 #include "mesh/marching_cubes.h"
 #include "quijibo/energy.h"
@@ -19,7 +20,7 @@ void AddEnergyCommand(CLI::App& app);
 void AddMapCommand(CLI::App& app);
 void AddTargetCommand(CLI::App& app);
 void AddBenchCommand(CLI::App& app);
-void AddPlotCommand(CLI::App& app);  // experiments/plot.h
+void AddPlotCommand(CLI::App& app);
 void AddOptimizeCommand(CLI::App& app);
 void AddModuleCommands(CLI::App& app);  // sdf, monopoles
 void AddModulusCommands(CLI::App& app);  // modulus, portal, compare, bench modulus (after AddBenchCommand)
@@ -28,24 +29,13 @@ void AddShapeCommands(CLI::App& app);  // fidelity, bench shapes (after AddBench
 void AddBenchBandCommand(CLI::App& app);  // bench band (after AddBenchCommand)
 void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/run_cmd.cpp)
 
-// Reads, validates and resolves an experiment file (every default filled in, every path absolute);
-// throws quijibo::Error "<file>: <JSON pointer>: <what>" on the first problem (run_cmd.cpp).
-nlohmann::json ResolveExperiment(const std::string& path);
-
-// `quijibo mesh` with another mesher (quijibo-mpi, docs/mpi.md). The mesher meshes exactly like
-// MeshField (mesh, summary, band when not null) and returns false on processes that must not write
-// (MPI workers); it may add other processes' counts into `stats`.
-using Mesher = std::function<bool(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary,
-                                  FieldBand* band, TriangleMesh* mesh, JuliaFieldStats* stats)>;
-void AddMeshCommand(CLI::App& app, const Mesher& mesher);
+// `quijibo mesh` with another mesher (quijibo-mpi, docs/mpi.md; pipeline::Mesher).
+void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher);
 
 // The mesher's options (--dense, --speck-removal, --surface-following, the sparse search's settings),
 // one definition shared by `quijibo mesh`, `modulus` and `portal` (mesher_options.cpp); the
 // resolution and box are each command's own.
 void AddMesherOptions(CLI::App* command, MeshingOptions& options);
-// The mesher's summary as JSON: sizes, components, open edges (all, and away from the box faces),
-// specks, surface following, evaluations, tiles, blocks, seconds.
-nlohmann::json MesherSummaryJson(const MeshingSummary& summary, const MeshingOptions& options);
 
 // A target given on the command line: a .qgrid file, or an analytic shape ("sphere",
 // "torus:major=1,minor=0.3") sampled on the default target box (frame.h, TargetGridFrame)

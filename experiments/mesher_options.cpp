@@ -1,5 +1,5 @@
-// The mesher's command-line options and summary, one definition shared by `quijibo mesh`,
-// `quijibo modulus` and `quijibo portal` (docs/meshing.md).
+// The mesher's command-line options, one definition shared by `quijibo mesh`, `quijibo modulus` and
+// `quijibo portal` (docs/meshing.md); its summary is pipeline::MesherSummaryJson.
 #include "experiments/cli.h"
 
 namespace quijibo::cli {
@@ -27,28 +27,6 @@ void AddMesherOptions(CLI::App* c, MeshingOptions& o) {
       ->check(CLI::IsMember({"on", "off"}))
       ->default_str("on");
   c->add_flag("--keep-specks", [&o](std::int64_t) { o.remove_specks = false; }, "Same as --speck-removal off");
-}
-
-nlohmann::json MesherSummaryJson(const MeshingSummary& s, const MeshingOptions& o) {
-  return {{"sparse", s.search_stride > 0},
-          {"vertices", s.vertices},
-          {"triangles", s.triangles},
-          {"components", s.components},
-          {"open_edges", s.open_edges},
-          {"open_edges_inside", s.open_edges_inside},
-          {"speck_removal", o.remove_specks},
-          {"specks_removed", s.specks_removed},
-          {"surface_following", o.follow_surface},
-          {"blocks_followed", s.blocks_followed},
-          {"evaluations",
-           {{"nodes", s.nodes_evaluated},
-            {"search", s.search_evaluations},
-            {"following", s.follow_evaluations},
-            {"bisection", s.bisection_evaluations},
-            {"non_finite", s.non_finite_values}}},
-          {"tiles", {{"meshed", s.tiles_meshed}, {"total", s.tiles_total}}},
-          {"blocks", {{"active", s.blocks_active}, {"total", s.blocks_total}}},
-          {"seconds", s.seconds}};
 }
 
 }  // namespace quijibo::cli

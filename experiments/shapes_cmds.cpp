@@ -1,10 +1,6 @@
 // `quijibo fidelity` (how well one Julia set takes its target's shape) and `quijibo bench shapes`
 // (the shape suite: every shape through `quijibo run`, then the fidelity figures, a table and a
 // picture sheet). Definitions of the figures: mesh/fidelity.h.
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,12 +13,11 @@
 #include "mesh/fidelity.h"
 #include "mesh/sdf_command.h"
 #include "mesh/triangle_mesh.h"
+#include "quijibo/child_process.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
 #include "quijibo/json_reader.h"
 #include "quijibo/progress.h"
-
-extern char** environ;
 
 namespace quijibo::cli {
 
@@ -60,22 +55,18 @@ Fidelity Measure(const FidelityArgs& a) {
 
 // Runs `quijibo args...` (this executable), stdout and stderr to files; returns the exit code.
 int RunSelf(const std::vector<std::string>& args, const std::string& out, const std::string& err) {
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<std::string> s{"quijibo"};
-  s.insert(s.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& x : s) argv.push_back(x.data());
-  argv.push_back(nullptr);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw Error("bench shapes: cannot start quijibo: " + std::string(std::strerror(rc)));
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  ChildOptions c;
+  c.program = SelfExecutable();
+  c.argv0 = "quijibo";
+  c.args = args;
+  c.stdin_path = "";
+  c.stdout_path = out;
+  c.stderr_path = err;
+  try {
+    return RunChild(c).exit_code;
+  } catch (const Error& e) {
+    throw Error(std::string("bench shapes: ") + e.what());
+  }
 }
 
 std::string LastLine(const std::string& path) {

@@ -1,5 +1,9 @@
 #include "mesh/fidelity.h"
 
+#include <limits>
+
+#include <unordered_map>
+
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -119,6 +123,53 @@ void MeasureSurfaceDistances(const TriangleMesh& julia, const TriangleMesh& shap
   };
   f.chamfer = 0.5 * (mean(ab) + mean(ba)) / diagonal;
   f.hausdorff = std::max(*std::max_element(ab.begin(), ab.end()), *std::max_element(ba.begin(), ba.end())) / diagonal;
+}
+
+std::vector<double> NearestPointDistances(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  std::vector<double> out(a.size(), std::numeric_limits<double>::infinity());
+  if (b.empty() || a.empty()) return out;
+  Vec3 lo = b[0], hi = b[0];
+  for (const Vec3& p : b)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  double vol = 1;
+  for (int k = 0; k < 3; ++k) vol *= std::max(hi[k] - lo[k], 1e-9);
+  const double cell = std::max(std::cbrt(vol / double(b.size())) * 2.0, 1e-9);
+  auto key = [&](long long i, long long j, long long k) {
+    return std::uint64_t(i) * 73856093ULL ^ std::uint64_t(j) * 19349663ULL ^ std::uint64_t(k) * 83492791ULL;
+  };
+  auto idx = [&](double x, int k) { return (long long)std::floor((x - lo[k]) / cell); };
+  std::unordered_multimap<std::uint64_t, int> grid;
+  grid.reserve(b.size());
+  for (int i = 0; i < int(b.size()); ++i) grid.emplace(key(idx(b[i][0], 0), idx(b[i][1], 1), idx(b[i][2], 2)), i);
+#pragma omp parallel for schedule(dynamic, 256)
+  for (long long n = 0; n < (long long)a.size(); ++n) {
+    const Vec3& p = a[n];
+    const long long ci = idx(p[0], 0), cj = idx(p[1], 1), ck = idx(p[2], 2);
+    double best2 = std::numeric_limits<double>::infinity();
+    for (int r = 0; r < 100000; ++r) {
+      // Scan the shell of cells at Chebyshev radius r; stop when no closer point can remain.
+      for (long long i = ci - r; i <= ci + r; ++i)
+        for (long long j = cj - r; j <= cj + r; ++j)
+          for (long long k = ck - r; k <= ck + r; ++k) {
+            if (std::max({std::llabs(i - ci), std::llabs(j - cj), std::llabs(k - ck)}) != r) continue;
+            auto range = grid.equal_range(key(i, j, k));
+            for (auto it = range.first; it != range.second; ++it) {
+              const Vec3& q = b[it->second];
+              const double d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+              best2 = std::min(best2, d2);
+            }
+          }
+      if (std::isfinite(best2) && std::sqrt(best2) <= r * cell) break;
+    }
+    out[n] = std::sqrt(best2);
+  }
+  return out;
+}
+
+double Mean(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return v.empty() ? std::nan("") : s / double(v.size());
 }
 
 }  // namespace quijibo

@@ -59,4 +59,10 @@ std::vector<Vec3> SampleSurface(const TriangleMesh& mesh, int count, std::uint64
 void MeasureSurfaceDistances(const TriangleMesh& julia, const TriangleMesh& shape, const FidelityOptions& options,
                              Fidelity& f);
 
+// For each point of `a`, the distance to the nearest point of `b` (a uniform hash grid over b;
+// infinity when b is empty).
+std::vector<double> NearestPointDistances(const std::vector<Vec3>& a, const std::vector<Vec3>& b);
+// The mean of `v` (NaN when empty).
+double Mean(const std::vector<double>& v);
+
 }  // namespace quijibo

@@ -28,4 +28,16 @@ BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, d
   return field;
 }
 
+BatchField MakeQuaternionMapField(std::shared_ptr<const QuaternionMap> map, const IterationOptions& o,
+                                  double point_scale) {
+  BatchField f;
+  f.iso = 0.0;
+  f.value_margin = kLogModulusValueMargin;
+  f.evaluate = [map, o, point_scale](const Vec3* p, std::size_t n, double* out) {
+    for (std::size_t i = 0; i < n; ++i)
+      out[i] = IterateField(*map, {point_scale * p[i][0], point_scale * p[i][1], point_scale * p[i][2], 0.0}, o);
+  };
+  return f;
+}
+
 }  // namespace quijibo

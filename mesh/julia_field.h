@@ -8,6 +8,7 @@
 
 #include "mesh/marching_cubes.h"
 #include "quijibo/julia.h"
+#include "quijibo/quaternion_map.h"
 #include "quijibo/real.h"
 
 namespace quijibo {
@@ -28,5 +29,10 @@ struct JuliaFieldStats {
 // outlive the field.
 BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, double iso = 0.0,
                           Precision precision = Precision::kDouble, JuliaFieldStats* stats = nullptr);
+
+// Any quaternion map's field log|q_n| (quijibo/quaternion_map.h) as a BatchField on points p:
+// q = [s p, 0] with s = `point_scale`; iso 0. `map` is shared by the field.
+BatchField MakeQuaternionMapField(std::shared_ptr<const QuaternionMap> map, const IterationOptions& options,
+                                  double point_scale = 1.0);
 
 }  // namespace quijibo

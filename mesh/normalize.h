@@ -15,8 +15,8 @@ namespace quijibo {
 //   padding         in [0, 0.5)
 //   fractal_radius  > 0, the fractal frame is w = fractal_radius * (p - 0.5)
 // Throws quijibo::Error when the bounding box is a point or the options are invalid.
-FractalFrame NormalizationFor(const TriangleMesh& mesh, double padding = 0.125,
-                              double fractal_radius = 4.0);
+FractalFrame NormalizationFor(const TriangleMesh& mesh, double padding = FractalFrame{}.padding,
+                              double fractal_radius = FractalFrame{}.fractal_radius);
 
 // How the fractal origin is placed (quijibo/frame.h).
 enum class OriginPlacement {

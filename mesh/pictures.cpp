@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "quijibo/error.h"
+#include "quijibo/mask.h"
 
 namespace quijibo {
 
@@ -186,6 +187,29 @@ Image RenderMesh(const TriangleMesh& mesh, int size, int views) {
         }
     }
   }
+  return img;
+}
+
+Image InsideSlice(const std::function<double(const Vec3&)>& field, const ScalarGrid& sdf, int size) {
+  Image img(size, size);
+  const Vec3 lo = sdf.frame.min_corner;
+  const Vec3 e = sdf.frame.extent();
+  const double side = std::max(e[0], e[1]);
+  std::vector<double> f(std::size_t(size) * size), s(f.size());
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const Vec3 p{lo[0] + side * (x + 0.5) / size, lo[1] + side * (size - y - 0.5) / size, 0.0};
+      f[std::size_t(y) * size + x] = field(p);
+      s[std::size_t(y) * size + x] = ExtendedSample(sdf, p);
+    }
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const std::size_t i = std::size_t(y) * size + x;
+      img.pixels[i] = f[i] < 0 ? Rgb{0, 0, 0} : Rgb{235, 235, 235};
+      const bool edge = (x + 1 < size && (s[i] < 0) != (s[i + 1] < 0)) || (y + 1 < size && (s[i] < 0) != (s[i + size] < 0));
+      if (edge) img.pixels[i] = {220, 30, 30};
+    }
   return img;
 }
 

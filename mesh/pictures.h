@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "mesh/marching_cubes.h"
@@ -54,8 +55,17 @@ Image SliceAgainstTarget(const BatchField& field, const ScalarGrid& target, cons
 Image ModulusVersorSlice(const RationalMap& map, const JuliaOptions& options, const SliceView& view,
                          double modulus_scale = 0.0, double iso = 0.0);
 
+// The slice z = 0 of a field over the box of `sdf` (its larger side, `size` pixels square):
+// {field < 0} black, else light grey, the target's outline {sdf = 0} red (`quijibo compare`).
+Image InsideSlice(const std::function<double(const Vec3&)>& field, const ScalarGrid& sdf, int size);
+
 // `views` (1 to 4) orthographic views side by side: front (looking along -z), side (along -x),
 // top (along -y) and three-quarter; each `size` pixels square, light from the viewer's upper left.
-Image RenderMesh(const TriangleMesh& mesh, int size = 400, int views = 4);
+struct RenderOptions {
+  int size = 400;  // pixels per view, in [16, 8192]
+  int views = 4;   // in [1, 4]
+};
+Image RenderMesh(const TriangleMesh& mesh, int size, int views);
+inline Image RenderMesh(const TriangleMesh& mesh, const RenderOptions& o = {}) { return RenderMesh(mesh, o.size, o.views); }
 
 }  // namespace quijibo

@@ -14,8 +14,8 @@ struct SdfCommandOptions {
   std::string output;         // the .qgrid to write
   std::string vdb_output;     // optional .vdb of the same field ("" = none)
   int resolution = 97;        // n: the grid has n^3 cells (TargetGridFrame)
-  double padding = 0.125;     // normalization padding, in [0, 0.5)
-  double fractal_radius = 4.0;
+  double padding = FractalFrame{}.padding;  // normalization padding, in [0, 0.5)
+  double fractal_radius = FractalFrame{}.fractal_radius;
   TargetBox box = TargetBox::kUnitCube;  // the grid's box (quijibo/frame.h)
   OriginPlacement origin = OriginPlacement::kCenter;  // the fractal origin (mesh/normalize.h)
   bool quiet = false;         // no summary on standard output

@@ -31,7 +31,9 @@ struct MonopoleOptions {
   ShellOptions shell;
   SamplingOptions sampling;  // the candidates
   GreedyFitOptions fit;
-  MonopoleTarget target = MonopoleTarget::kPotential;
+  // 1 - P, as the reference code, whose fits give the paper's results (top and bottom roots);
+  // the paper's text fits P (positive monopoles only).
+  MonopoleTarget target = MonopoleTarget::kOneMinusPotential;
 
   // Empty string when valid, else what is wrong (the first problem found).
   std::string validate() const;

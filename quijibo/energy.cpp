@@ -63,4 +63,11 @@ double MedianLogModulus(const RationalMap& map, const EnergyGrid& grid) {
   return L[L.size() / 2];
 }
 
+double EnergyOfField(const EnergyGrid& g, const std::vector<double>& L, double a) {
+  double s = 0;
+  for (std::size_t c = 0; c < L.size(); ++c)
+    if (std::isfinite(L[c])) s += -std::tanh(a * L[c]) * g.weight[c];
+  return s / g.eta;
+}
+
 }  // namespace quijibo

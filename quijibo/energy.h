@@ -59,6 +59,10 @@ std::vector<char> SingularCells(const RationalMap& map, const EnergyGrid& grid,
 // give random maps a sensible C.
 double MedianLogModulus(const RationalMap& map, const EnergyGrid& grid);
 
+// psi = (1/eta) sum_c -tanh(alpha L_c) W_c of any field L on the grid's cells (the 2015 energy of
+// another method's log-modulus, for comparisons); non-finite L are left out.
+double EnergyOfField(const EnergyGrid& grid, const std::vector<double>& L, double alpha);
+
 // Cells per accumulation block. Partial sums are formed per block and added in block order, so
 // results do not depend on the number of threads.
 inline constexpr std::int64_t kEnergyBlock = 2048;

@@ -10,24 +10,14 @@
 #include <fstream>
 #include <sstream>
 
+#include "quijibo_command.h"
+
 namespace quijibo {
 namespace {
 
-struct CommandResult {
-  int code;
-  std::string out;
-};
-
-CommandResult Shell(const std::string& cmd) {
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  std::string out;
-  char buf[4096];
-  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-CommandResult Quijibo(const std::string& args) { return Shell(std::string(QUIJIBO_BINARY) + " --quiet " + args); }
+using testing::CommandResult;
+CommandResult Shell(const std::string& cmd) { return testing::RunShell(cmd); }
+CommandResult Quijibo(const std::string& args) { return testing::RunQuijibo(args); }
 
 bool HaveGnuplot() { return Shell("gnuplot --version").code == 0; }
 

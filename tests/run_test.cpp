@@ -20,6 +20,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "quijibo_command.h"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -41,47 +43,20 @@ std::string TempDir(const std::string& name) {
   return d.string();
 }
 
-// Runs the binary with `args`; stderr is collected in *err (when given). With `background`, returns at
-// once with the pid. `max_file_bytes` (0: none) limits every file the child writes (RLIMIT_FSIZE with
-// SIGXFSZ ignored, so an over-long write fails with EFBIG as a write to a full disk fails with ENOSPC).
-// `env` ("NAME=value") is added to the child's environment. `as_nobody`: run as the user nobody
-// (when the test runs as root, who ignores file permissions).
+// Runs the binary with `args` (quijibo_command.h); stderr is collected in *err (when given). With
+// `background`, returns at once with the pid. `max_file_bytes` (0: none) limits every file the
+// child writes; `env` ("NAME=value") is added to the child's environment; `as_nobody`: run as the
+// user nobody (when the test runs as root, who ignores file permissions).
 int RunQ(const std::vector<std::string>& args, std::string* err = nullptr, pid_t* background = nullptr,
          rlim_t max_file_bytes = 0, const std::string& env = "", bool as_nobody = false) {
-  std::vector<std::string> all = {QUIJIBO_BINARY};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const std::string err_path =
-      (fs::temp_directory_path() / ("quijibo_run_stderr_" + std::to_string(::getpid()))).string();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    if (max_file_bytes) {
-      const rlimit limit{max_file_bytes, max_file_bytes};
-      setrlimit(RLIMIT_FSIZE, &limit);
-      signal(SIGXFSZ, SIG_IGN);
-    }
-    const int e = open(err ? err_path.c_str() : "/dev/null", O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int o = open("/dev/null", O_WRONLY);
-    dup2(e, STDERR_FILENO);
-    dup2(o, STDOUT_FILENO);
-    if (!env.empty()) ::putenv(const_cast<char*>(env.c_str()));
-    if (as_nobody && (::setgroups(0, nullptr) != 0 || ::setgid(65534) != 0 || ::setuid(65534) != 0)) _exit(126);
-    execv(QUIJIBO_BINARY, argv.data());
-    _exit(127);
-  }
-  if (background) {
-    *background = pid;
-    return 0;
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (err) {
-    *err = Slurp(err_path);
-    fs::remove(err_path);
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  quijibo::testing::LaunchOptions o;
+  o.background = background;
+  o.max_file_bytes = max_file_bytes;
+  o.env = env;
+  o.as_nobody = as_nobody;
+  const auto r = quijibo::testing::RunQuijiboArgs(args, o);
+  if (err) *err = r.err;
+  return r.code;
 }
 
 bool HaveGnuplot() { return std::system("gnuplot --version > /dev/null 2>&1") == 0; }
@@ -91,7 +66,7 @@ json Tiny() {
   return {{"name", "tiny"},
           {"seed", 3},
           {"target", {{"analytic", "torus"}, {"resolution", 20}}},
-          {"initial", {{"kind", "random"}, {"top", 10}, {"bottom", 8}}},
+          {"initial", {{"kind", "random"}, {"top", 10}, {"bottom", 8}, {"root_radius", 1.0}}},
           {"optimizer",
            {{"schedule", "10(VF)20(VF)"}, {"max_iterations", {{"V", 8}, {"F", 15}}}, {"checkpoint_every", 5}}},
           {"mesh", {{"resolution", 20}, {"iterations", 1}}},

@@ -1,5 +1,5 @@
-// libFuzzer target: the experiment parser (ResolveExperiment: JSON parsing, validation with JSON
-// pointers, defaults). The input is the experiment file; it sits in a folder that also holds a
+// libFuzzer target: the experiment parser (pipeline::Experiment: JSON parsing, validation with JSON
+// pointers, defaults, the resolved form). The input is the experiment file; it sits in a folder that also holds a
 // small mesh ("bunny.obj"), a schedule ("schedule.json") and a versor polynomial ("poly.json"), so
 // relative references can resolve.
 // A quijibo::Error is the expected refusal; any other exception, a crash or a sanitizer report is
@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "experiments/cli.h"
+#include "experiments/pipeline/experiment.h"
 #include "fuzz_input_file.h"
 #include "quijibo/error.h"
 
@@ -33,12 +33,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   PrepareFolder();
   const std::string path = quijibo::fuzz::WriteInput("experiment.json", data, size);
   try {
-    const nlohmann::json resolved = quijibo::cli::ResolveExperiment(path);
+    const nlohmann::json resolved = quijibo::pipeline::Experiment::FromFile(path).ToJson();
     if (!resolved.is_object()) std::abort();
   } catch (const quijibo::Error&) {
     // refused with a message: fine
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "ResolveExperiment threw a non-quijibo exception: %s\n", e.what());
+    std::fprintf(stderr, "the experiment parser threw a non-quijibo exception: %s\n", e.what());
     std::abort();
   }
   return 0;

@@ -135,6 +135,7 @@ TEST(Monopole, PipelineOnTheSphereIsDeterministic) {
   const auto mesh = testing::MakeIcosphere(3, c, a);
   const ScalarGrid sdf = testing::SphereSdf(40, c, 3.0, a);
   MonopoleOptions opt;
+  opt.target = MonopoleTarget::kPotential;
   opt.sampling.count = 5000;
   opt.fit.epsilon = 0.01;
   std::vector<std::string> stages;
@@ -164,6 +165,7 @@ TEST(Monopole, PipelineDoesNotDependOnTheThreadCount) {
   const auto mesh = testing::MakeIcosphere(3);
   const ScalarGrid sdf = testing::SphereSdf(32, {0, 0, 0}, 3.0, 1.0);
   MonopoleOptions opt;
+  opt.target = MonopoleTarget::kPotential;
   opt.bem.max_elements = 600;
   opt.sampling.count = 3000;
   const int threads = omp_get_max_threads();

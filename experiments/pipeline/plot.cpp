@@ -1,14 +1,10 @@
-// `quijibo plot`: see plot.h.
-//
 // The data go to a private temporary folder as gnuplot data files next to a gnuplot script;
-// gnuplot runs through posix_spawnp (no shell), renders PNG and SVG to temporary names beside
-// the outputs, and both are renamed into place only when gnuplot succeeded, so a failed plot
-// leaves no output files and never a partial one.
-#include "experiments/plot.h"
+// gnuplot runs as a child process (no shell), renders PNG and SVG to temporary names beside the
+// outputs, and both are renamed into place only when gnuplot succeeded, so a failed plot leaves
+// no output files and never a partial one.
+#include "experiments/pipeline/plot.h"
 
 #include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,19 +15,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <memory>
-#include <optional>
-#include <set>
 #include <sstream>
 
-#include "experiments/cli.h"
+#include "quijibo/child_process.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
-#include "quijibo/json_reader.h"
 
-extern char** environ;
-
-namespace quijibo::cli {
+namespace quijibo::pipeline {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
@@ -42,39 +32,17 @@ bool Blank(const std::string& s) {
   return std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isspace(c); });
 }
 
-// "<level> <pass>" from whichever of the two keys a line has.
-std::string PassLabel(const JsonReader& r) {
-  std::string label;
-  if (r.has("/level") && r.at("/level").is_number()) label = r.at("/level").dump();
-  if (r.has("/pass") && r.at("/pass").is_string()) {
-    if (!label.empty()) label += " ";
-    label += r.at("/pass").get<std::string>();
-  }
-  return label;
-}
-
-// Identifies the pass an iteration line belongs to (empty when the line names none).
-std::string PassKey(const json& j) {
-  std::string key;
-  for (const char* k : {"level", "level_index", "pass", "pass_index"})
-    if (j.contains(k)) key += std::string(k) + "=" + j[k].dump() + ";";
-  return key;
-}
-
-// psi of key `pointer`, or nothing for null (a NaN the writer could not put into JSON).
-std::optional<double> Energy(const JsonReader& r, const std::string& pointer) {
-  if (r.at(pointer).is_null()) return std::nullopt;
-  return r.number(pointer);
-}
-
 // A string as a gnuplot single-quoted string: no escapes, no macro or backquote expansion; a
 // quote is doubled. Control characters (newlines) become spaces.
 std::string Quote(const std::string& s) {
   std::string out = "'";
   for (char c : s) {
-    if (c == '\'') out += "''";
-    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) out += ' ';
-    else out += c;
+    if (c == '\'')
+      out += "''";
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      out += ' ';
+    else
+      out += c;
   }
   return out + "'";
 }
@@ -135,30 +103,29 @@ constexpr const char* kInstallHint = "gnuplot not found: install it (Debian: apt
 
 // Runs `gnuplot script` with stdin and stdout on /dev/null and stderr into err_path.
 void RunGnuplot(const std::string& script, const std::string& err_path) {
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-  std::vector<char*> argv = {const_cast<char*>("gnuplot"), const_cast<char*>(script.c_str()), nullptr};
-  pid_t pid = 0;
-  const int rc = ::posix_spawnp(&pid, "gnuplot", &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc == ENOENT) throw Error(kInstallHint);
-  if (rc != 0) throw Error(std::string("cannot run gnuplot: ") + std::strerror(rc));
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) throw Error(std::string("waiting for gnuplot: ") + std::strerror(errno));
+  ChildOptions c;
+  c.program = "gnuplot";
+  c.search_path = true;
+  c.args = {script};
+  c.stdout_path = "/dev/null";
+  c.stderr_path = err_path;
+  c.file_mode = 0600;
+  ChildResult r;
+  try {
+    r = RunChild(c);
+  } catch (const Error& e) {
+    if (std::string(e.what()).find(std::strerror(ENOENT)) != std::string::npos) throw Error(kInstallHint);
+    throw Error(std::string("cannot run gnuplot: ") + e.what());
   }
-  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
-  if (WIFEXITED(status) && WEXITSTATUS(status) == 127) throw Error(kInstallHint);
+  if (r.ok()) return;
+  if (!r.signaled && r.exit_code == 127) throw Error(kInstallHint);
   std::string err;
   try {
     err = LastLine(ReadFile(err_path));
   } catch (const Error&) {
   }
-  const std::string how = WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
-                                            : "signal " + std::to_string(WTERMSIG(status));
+  const std::string how =
+      r.signaled ? "signal " + std::to_string(r.signal) : "exit status " + std::to_string(r.exit_code);
   throw Error("gnuplot failed (" + how + ")" + (err.empty() ? "" : ": " + err));
 }
 
@@ -185,22 +152,17 @@ std::string Describe(const json& run) {
   return s;
 }
 
-struct PlotOptions {
-  std::vector<std::string> logs, labels;
-  std::string out, title;
-  int width = 1200, height = 700;
-};
-
 // One color per log; a single log gets a second color for its absolute energy.
 const char* const kColors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
                                "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+
+}  // namespace
 
 void Plot(const PlotOptions& o) {
   std::vector<ConvergenceLog> logs;
   for (const auto& path : o.logs) logs.push_back(ReadConvergenceLog(path));
   if (o.labels.size() > logs.size())
-    throw Error("--label: " + std::to_string(o.labels.size()) + " labels for " + std::to_string(logs.size()) +
-                " logs");
+    throw Error("--label: " + std::to_string(o.labels.size()) + " labels for " + std::to_string(logs.size()) + " logs");
 
   // The output folder must exist; gnuplot's own message would be vaguer.
   const fs::path prefix(o.out);
@@ -335,7 +297,8 @@ void Plot(const PlotOptions& o) {
         "set grid xtics ytics mytics lw 1 lc rgb '#d8d8d8', lw 1 lc rgb '#efefef'\n"
         "set border lw 1\n"
      << "set xrange [" << (min_step < max_step ? min_step : min_step - 1) << ":"
-     << (min_step < max_step ? max_step : max_step + 1) << "]\n"
+     << (min_step < max_step ? max_step : max_step + 1)
+     << "]\n"
      // The key under the x label, one row per log; gnuplot's own "below" would overlap the label.
      << "set bmargin " << 4.5 + 1.25 * double(rows) << "\n"
      << "set key vertical maxrows " << rows
@@ -358,127 +321,14 @@ void Plot(const PlotOptions& o) {
   scratch.commit();
 }
 
-}  // namespace
-
-bool HasEnergies(const ConvergenceLog& log) {
-  for (const auto& segment : log.relative)
-    if (!segment.empty()) return true;
-  return !log.absolute.empty();
+const Schema<PlotOptions>& PlotOptions::Settings() {
+  static const Schema<PlotOptions> s =
+      Schema<PlotOptions>()
+          .Integer(
+              "width", "--width", "Image width in pixels", [](auto& o) -> int& { return o.width; }, 200, 10000)
+          .Integer(
+              "height", "--height", "Image height in pixels", [](auto& o) -> int& { return o.height; }, 150, 10000);
+  return s;
 }
 
-ConvergenceLog ReadConvergenceLog(const std::string& path) {
-  ConvergenceLog log;
-  log.path = path;
-  const std::string text = ReadFile(path);
-  std::vector<std::string> lines;
-  for (std::size_t b = 0; b <= text.size();) {
-    std::size_t e = text.find('\n', b);
-    if (e == std::string::npos) e = text.size();
-    lines.push_back(text.substr(b, e - b));
-    b = e + 1;
-  }
-  std::size_t last = lines.size();
-  while (last > 0 && Blank(lines[last - 1])) --last;  // the last non-blank line is lines[last - 1]
-
-  std::string current_pass;  // PassKey of the current segment
-  bool open_segment = false;
-  std::vector<ConvergenceLog::Point> pass_end_absolute;
-  for (std::size_t n = 1; n <= last; ++n) {
-    const std::string& line = lines[n - 1];
-    if (Blank(line)) continue;
-    const std::string where = path + ":" + std::to_string(n);
-    json j;
-    try {
-      j = ParseJson(line, path, n);
-    } catch (const Error&) {
-      if (n != last) throw;
-      std::fprintf(stderr, "quijibo: warning: %s: skipped the unparsable last line (a killed run?)\n", where.c_str());
-      log.truncated = true;
-      break;
-    }
-    const JsonReader r(j, where);
-    if (!j.is_object()) r.fail("", "expected a JSON object, found " + JsonReader::describe(j));
-    const std::string type = r.string("/type");
-    if (type == "run") {
-      log.run = j;
-      // The start map's absolute energy: the first point of the absolute curve.
-      if (r.has("/absolute_energy") && r.has("/step"))
-        if (const auto psi = Energy(r, "/absolute_energy")) pass_end_absolute.push_back({r.integer("/step"), *psi});
-    } else if (type == "pass_start") {
-      const long long step = r.integer("/step");
-      log.passes.push_back({step, PassLabel(r)});
-      current_pass = PassKey(j);
-      open_segment = false;
-    } else if (type == "iteration") {
-      const long long step = r.integer("/step");
-      const std::string key = PassKey(j);
-      if (key != current_pass) {
-        // A pass the log did not announce (e.g. no pass_start lines, or a log begun mid-pass).
-        if (!key.empty()) log.passes.push_back({step, PassLabel(r)});
-        current_pass = key;
-        open_segment = false;
-      }
-      if (!open_segment) {
-        if (log.relative.empty() || !log.relative.back().empty()) log.relative.emplace_back();
-        open_segment = true;
-      }
-      if (const auto psi = Energy(r, "/energy")) log.relative.back().push_back({step, *psi});
-    } else if (type == "absolute") {
-      const long long step = r.integer("/step");
-      if (const auto psi = Energy(r, "/energy")) log.absolute.push_back({step, *psi});
-    } else if (type == "pass_end") {
-      const long long step = r.integer("/step");
-      // The optimizer writes "absolute_end"; "absolute_energy" is the older name.
-      for (const char* key : {"/absolute_end", "/absolute_energy"})
-        if (r.has(key)) {
-          if (const auto psi = Energy(r, key)) pass_end_absolute.push_back({step, *psi});
-          break;
-        }
-      open_segment = false;
-    }
-    // Other line types are for other readers.
-  }
-  while (!log.relative.empty() && log.relative.back().empty()) log.relative.pop_back();
-  std::set<long long> covered;
-  for (const auto& p : log.absolute) covered.insert(p.step);
-  for (const auto& p : pass_end_absolute)
-    if (covered.insert(p.step).second) log.absolute.push_back(p);
-  std::stable_sort(log.absolute.begin(), log.absolute.end(),
-                   [](const auto& a, const auto& b) { return a.step < b.step; });
-  // Two marks at one step (pass_start followed by an unannounced change) keep the later label.
-  std::vector<ConvergenceLog::PassMark> marks;
-  for (const auto& m : log.passes) {
-    if (!marks.empty() && marks.back().step == m.step) marks.back() = m;
-    else marks.push_back(m);
-  }
-  log.passes = std::move(marks);
-  return log;
-}
-
-void AddPlotCommand(CLI::App& app) {
-  auto o = std::make_shared<PlotOptions>();
-  CLI::App* c = app.add_subcommand(
-      "plot",
-      "Convergence plot of optimizer logs (log.jsonl) like Fig. 11 of the 2015 paper, as PREFIX.png and "
-      "PREFIX.svg (needs gnuplot)");
-  c->footer(
-      "y is (psi + 1) / 2 on a log axis, x the optimization step. Each log gives its relative energy (line; "
-      "broken at pass starts, since each level has its own grid and weights) and its absolute energy "
-      "(finest grid, original weights: dashed line with points). Pass starts are dashed vertical lines "
-      "labelled \"<level> <pass>\"; with several logs, only the first log's are drawn. An unparsable last "
-      "line (a killed run) is skipped with a warning.");
-  c->add_option("logs", o->logs, "Optimizer logs (log.jsonl), one curve pair each")
-      ->required()
-      ->check(CLI::ExistingFile);
-  c->add_option("-o,--out", o->out, "Output prefix: writes PREFIX.png and PREFIX.svg")->required();
-  c->add_option("--label", o->labels,
-                "Legend name of each log, in order (repeat the option; default: the run's \"label\", "
-                "else the file's stem, or its folder's name for log.jsonl)")
-      ->allow_extra_args(false);
-  c->add_option("--title", o->title, "Plot title (default: QUIJIBO convergence[: label (backend, ...)])");
-  c->add_option("--width", o->width, "Image width in pixels")->capture_default_str()->check(CLI::Range(200, 10000));
-  c->add_option("--height", o->height, "Image height in pixels")->capture_default_str()->check(CLI::Range(150, 10000));
-  c->callback([o] { Plot(*o); });
-}
-
-}  // namespace quijibo::cli
+}  // namespace quijibo::pipeline

@@ -1,18 +1,11 @@
-// `quijibo plot`: convergence plots of optimizer logs (log.jsonl), like Fig. 11 of the QUIJIBO
-// paper (Kim 2015): normalized energy (psi + 1) / 2 on a log axis against the optimization step,
-// the relative energy (current level's grid and weights) as a line, the absolute energy (finest
-// grid, original weights) as dashed line with points, and pass starts as dashed vertical lines
-// labelled "<level> <pass>" ("25 V", "50 F", ...). Drawn by gnuplot into PREFIX.png and PREFIX.svg.
+// Optimizer logs (log.jsonl, optim/optimizer.h) as a convergence plot reads them.
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-namespace quijibo::cli {
-
-void AddPlotCommand(CLI::App& app);
+namespace quijibo::pipeline {
 
 // What a plot needs from one optimizer log.
 struct ConvergenceLog {
@@ -45,4 +38,4 @@ bool HasEnergies(const ConvergenceLog& log);
 // bad line throws quijibo::Error naming "<path>:<line>".
 ConvergenceLog ReadConvergenceLog(const std::string& path);
 
-}  // namespace quijibo::cli
+}  // namespace quijibo::pipeline

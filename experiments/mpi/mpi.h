@@ -1,0 +1,18 @@
+// quijibo-mpi (docs/mpi.md): `quijibo mesh` over MPI ranks (mesh.cpp) and parameter sweeps of
+// `quijibo` commands (sweep.cpp), both over one work queue (work_queue.h).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "experiments/pipeline/mesh.h"
+
+namespace quijibo::mpi {
+
+// A pipeline::Mesher over the ranks: the single-process mesh, bit for bit; false on workers.
+bool MpiMesher(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary, FieldBand* band,
+               TriangleMesh* mesh, JuliaFieldStats* stats);
+
+// `quijibo-mpi sweep SWEEP.json`.
+void AddSweep(CLI::App& app);
+
+}  // namespace quijibo::mpi

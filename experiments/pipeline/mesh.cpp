@@ -1,0 +1,227 @@
+#include "experiments/pipeline/mesh.h"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <limits>
+
+#include "mesh/vdb.h"
+#include "quijibo/error.h"
+
+namespace quijibo::pipeline {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string Extension(const std::string& path) {
+  std::string e = fs::path(path).extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return e;
+}
+
+void CheckOutput(const std::string& path, const std::vector<std::string>& extensions, const std::string& what) {
+  if (path.empty()) return;
+  if (std::find(extensions.begin(), extensions.end(), Extension(path)) == extensions.end()) {
+    std::string list;
+    for (const auto& e : extensions) list += (list.empty() ? "" : " or ") + e;
+    throw Error(path + ": " + what + " must end in " + list);
+  }
+  const auto dir = fs::path(path).parent_path();
+  if (!dir.empty() && !fs::is_directory(dir)) throw Error(path + ": folder " + dir.string() + " does not exist");
+}
+
+bool Wants(const MeshStageOptions& o, const char* grid) {
+  return std::find(o.vdb_grids.begin(), o.vdb_grids.end(), grid) != o.vdb_grids.end();
+}
+
+}  // namespace
+
+const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
+  using O = MeshStageOptions;
+  static const Schema<O> s =
+      Schema<O>()
+          .Boolean("enabled", "", "Mesh the Julia set", [](auto& o) -> bool& { return o.enabled; })
+          .Integer(
+              "resolution", "-r,--resolution", "Cells along the longest side of the box",
+              [](auto& o) -> int& { return o.meshing.resolution; }, 2, 65536)
+          .Integer(
+              "iterations", "-n,--iterations", "Map applications n (paper: 1 and 4)",
+              [](auto& o) -> int& { return o.julia.iterations; }, 1, 1000)
+          .Number(
+              "escape", "--escape", "Escape radius (reference: 2000)",
+              [](auto& o) -> double& { return o.julia.escape_radius; }, 1.0, 1e300, true)
+          .Number(
+              "iso", "--iso", "Iso value of log|q_n| (reference: 0)", [](auto& o) -> double& { return o.iso; }, -1e6,
+              1e6)
+          .Choice("frame", "--frame", "Coordinates of the output: user (the input mesh's) or fractal",
+                  [](auto& o) -> std::string& { return o.frame; }, {"user", "fractal"})
+          .Boolean("vdb", "", "Also write julia.vdb", [](auto& o) -> bool& { return o.vdb; })
+          .Boolean("obj", "", "Also write julia.obj", [](auto& o) -> bool& { return o.obj; })
+          .Choice(
+              "precision", "--precision", "Iteration precision: float, double, long-double or float128",
+              [](auto& o) -> std::string& { return o.precision; }, kPrecisionNames)
+          .String("optimizer", "", "Which optimizer's map to mesh",
+                  [](auto& o) -> std::string& { return o.optimizer; });
+  return s;
+}
+
+std::string MeshStageOptions::Validate() const {
+  if (std::string why = Settings().Check(*this); !why.empty()) return why;
+  if (!box.empty() && box.size() != 6) return "box: expected xmin,ymin,zmin,xmax,ymax,zmax";
+  for (std::size_t a = 0; a < 3 && box.size() == 6; ++a)
+    if (!(box[3 + a] > box[a])) return "box: max must exceed min on every axis";
+  for (const auto& g : vdb_grids)
+    if (g != "surface" && g != "density" && g != "field")
+      return "vdb grids: expected surface, density or field, found " + g;
+  if (!(vdb_band >= 1 && vdb_band <= 1000)) return "vdb band: expected a number in [1, 1000]";
+  if (!rotation.empty() && rotation.size() != 4) return "rotation: expected ax,ay,az,degrees";
+  return julia.validate();
+}
+
+MeshStageOptions MeshStageOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
+                                            const MeshStageOptions& start) {
+  MeshStageOptions o = start;
+  Settings().Read(r, p, base, o);
+  return o;
+}
+
+json MeshStageOptions::ToJson() const {
+  json j;
+  Settings().Write(*this, j);
+  return j;
+}
+
+bool LocalMesher(const BatchField& field, const MeshingOptions& o, MeshingSummary* summary, FieldBand* band,
+                 TriangleMesh* mesh, JuliaFieldStats*) {
+  *mesh = MeshField(field, o, summary, band);
+  return true;
+}
+
+MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& o, const Mesher& mesher) {
+  MeshStageResult r;
+  r.meshing = o.meshing;
+  MeshingOptions& m = r.meshing;
+  const double half = map.frame.fractal_radius / 2;
+  const Vec3 c = map.frame.box_center();
+  m.min_corner = {c[0] - half, c[1] - half, c[2] - half};
+  m.max_corner = {c[0] + half, c[1] + half, c[2] + half};
+  if (o.box.size() == 6)
+    for (int a = 0; a < 3; ++a) m.min_corner[a] = o.box[a], m.max_corner[a] = o.box[3 + a];
+  if (auto why = m.validate(); !why.empty()) throw Error("mesh: " + why);
+  if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
+  r.julia = o.julia;
+  if (o.rotation.size() == 4) {
+    const Vec3 center{(m.min_corner[0] + m.max_corner[0]) / 2, (m.min_corner[1] + m.max_corner[1]) / 2,
+                      (m.min_corner[2] + m.max_corner[2]) / 2};
+    r.julia.placement =
+        SampleTransform::AxisAngle({o.rotation[0], o.rotation[1], o.rotation[2]}, o.rotation[3], center);
+  }
+  if (auto why = r.julia.validate(); !why.empty()) throw Error(why);
+  JuliaFieldStats stats;
+  const BatchField field = MakeJuliaField(map, r.julia, o.iso, ParsePrecision(o.precision), &stats);
+  const bool want_band = Wants(o, "field");
+  r.writer = mesher(field, m, &r.summary, want_band ? &r.band : nullptr, &r.mesh, &stats);
+  r.escaped = stats.escaped;
+  r.non_finite = stats.non_finite;
+  // From the box coordinates the mesher used to the fractal frame (rotation), then the user frame.
+  const bool rotate = !r.julia.placement.is_identity(), user = o.frame == "user";
+  for (Vec3& v : r.mesh.vertices) {
+    if (rotate) v = r.julia.placement.apply(v);
+    if (user) v = map.frame.fractal_to_user(v);
+  }
+  return r;
+}
+
+void CheckMeshFiles(const MeshFiles& f) {
+  CheckOutput(f.out, {".ply", ".obj"}, "the mesh");
+  CheckOutput(f.obj, {".obj"}, "--obj");
+  CheckOutput(f.vdb, {".vdb"}, "--vdb");
+}
+
+void WriteMeshFiles(const MeshStageResult& r, const RationalMap& map, const MeshStageOptions& o, const MeshFiles& f) {
+  if (r.empty()) return;
+  if (Extension(f.out) == ".obj")
+    WriteObj(f.out, r.mesh);
+  else
+    WritePly(f.out, r.mesh, o.ply_double ? PlyPrecision::kFloat64 : PlyPrecision::kFloat32);
+  if (!f.obj.empty()) WriteObj(f.obj, r.mesh);
+  if (f.vdb.empty()) return;
+  const bool user = o.frame == "user";
+  const MeshLattice& l = r.band.lattice;
+  const double spacing = r.summary.spacing / (user ? map.frame.user_to_fractal_scale() : 1.0);
+  VdbVolumeOptions vo;
+  vo.voxel_size = spacing;
+  vo.half_width = o.vdb_band;
+  vo.surface = Wants(o, "surface");
+  vo.density = Wants(o, "density");
+  vo.coordinates = user ? "user" : "fractal";
+  VdbRawField raw;
+  if (Wants(o, "field")) {
+    raw.origin = user ? map.frame.fractal_to_user(l.origin) : l.origin;
+    raw.spacing = spacing;
+    raw.voxels = &r.band.nodes;
+    raw.values = &r.band.values;
+    raw.background = std::numeric_limits<float>::max();
+    raw.iso = o.iso;
+    raw.name = "julia";
+    raw.quantity = "log-modulus";
+  }
+  WriteVdbVolumes(f.vdb, r.mesh, vo, Wants(o, "field") ? &raw : nullptr);
+}
+
+json JuliaJson(const JuliaOptions& j, double iso, const std::string& precision) {
+  return {{"iterations", j.iterations},
+          {"escape_radius", j.escape_radius},
+          {"iso", iso},
+          {"slice", j.slice},
+          {"root_translation", j.root_translation},
+          {"root_scale", j.root_scale},
+          {"rotation", j.placement.rotation},
+          {"rotation_center", j.placement.center},
+          {"precision", precision}};
+}
+
+json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std::string& map_path, const MeshFiles& f) {
+  const MeshTopology topo = AnalyzeTopology(r.mesh);
+  const MeshingSummary& s = r.summary;
+  json summary = {{"map", map_path},
+                  {"out", r.empty() ? json(nullptr) : json(f.out)},
+                  {"frame", o.frame},
+                  {"julia", JuliaJson(r.julia, o.iso, o.precision)},
+                  {"box", {{"min", r.meshing.min_corner}, {"max", r.meshing.max_corner}}},
+                  {"resolution", r.meshing.resolution},
+                  {"cells", s.cells},
+                  {"spacing", s.spacing},
+                  {"band_nodes", r.band.nodes.size()}};
+  summary.update(MesherSummaryJson(s, r.meshing));
+  summary["boundary_edges"] = topo.boundary_edges;  // = open_edges (kept for older readers)
+  summary["non_manifold_edges"] = topo.non_manifold_edges;
+  summary["evaluations"]["escaped"] = r.escaped;
+  return summary;
+}
+
+json MesherSummaryJson(const MeshingSummary& s, const MeshingOptions& o) {
+  return {{"sparse", s.search_stride > 0},
+          {"vertices", s.vertices},
+          {"triangles", s.triangles},
+          {"components", s.components},
+          {"open_edges", s.open_edges},
+          {"open_edges_inside", s.open_edges_inside},
+          {"speck_removal", o.remove_specks},
+          {"specks_removed", s.specks_removed},
+          {"surface_following", o.follow_surface},
+          {"blocks_followed", s.blocks_followed},
+          {"evaluations",
+           {{"nodes", s.nodes_evaluated},
+            {"search", s.search_evaluations},
+            {"following", s.follow_evaluations},
+            {"bisection", s.bisection_evaluations},
+            {"non_finite", s.non_finite_values}}},
+          {"tiles", {{"meshed", s.tiles_meshed}, {"total", s.tiles_total}}},
+          {"blocks", {{"active", s.blocks_active}, {"total", s.blocks_total}}},
+          {"seconds", s.seconds}};
+}
+
+}  // namespace quijibo::pipeline

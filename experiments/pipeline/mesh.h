@@ -1,0 +1,91 @@
+// The mesh stage: the Julia set {log|q_n| < iso} of a map, meshed by marching cubes with bisection
+// (mesh/marching_cubes.h, docs/meshing.md), as PLY/OBJ and OpenVDB volumes.
+#pragma once
+
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "experiments/pipeline/settings.h"
+#include "mesh/julia_field.h"
+#include "mesh/marching_cubes.h"
+#include "mesh/triangle_mesh.h"
+#include "quijibo/julia.h"
+#include "quijibo/rational_map.h"
+
+namespace quijibo::pipeline {
+
+inline const std::vector<std::string> kPrecisionNames = {"float", "double", "long-double", "float128"};
+
+struct MeshStageOptions {
+  MeshingOptions meshing;      // resolution and the mesher's settings (box: see `box`)
+  JuliaOptions julia;          // n, escape radius, slice, root translation and scale, placement
+  double iso = 0.0;            // the surface log|q_n| = iso
+  std::string frame = "user";  // coordinates of the output: "user" (the input mesh's) or "fractal"
+  std::string precision = "double";
+  // The box in the fractal frame, xmin,ymin,zmin,xmax,ymax,zmax; empty: the whole normalized cube
+  // (the map's box centre +- fractal_radius / 2).
+  std::vector<double> box;
+  // Rotate the sampling box about its centre: ax, ay, az, degrees; empty: none.
+  std::vector<double> rotation;
+  std::vector<std::string> vdb_grids{"surface", "density"};  // of the .vdb: surface, density, field
+  double vdb_band = 3.0;                                     // half-width of the level set's narrow band, voxels
+  bool ply_double = false;                                   // PLY coordinates as double
+  // `quijibo run` only.
+  bool enabled = true;
+  bool vdb = true, obj = false;  // also julia.vdb, julia.obj
+  std::string optimizer;         // which optimizer's map (Experiment: the first)
+
+  std::string Validate() const;
+  static const Schema<MeshStageOptions>& Settings();
+  static MeshStageOptions FromJson(const JsonReader& r, const std::string& pointer, const std::filesystem::path& base,
+                                   const MeshStageOptions& start);
+  static MeshStageOptions FromJson(const JsonReader& r, const std::string& pointer, const std::filesystem::path& base) {
+    return FromJson(r, pointer, base, MeshStageOptions());
+  }
+  nlohmann::json ToJson() const;
+};
+
+// A mesher meshes exactly like MeshField (mesh, summary, band when not null) and returns false on
+// processes that must not write (MPI workers); it may add other processes' counts into `stats`
+// (quijibo-mpi, docs/mpi.md).
+using Mesher = std::function<bool(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary,
+                                  FieldBand* band, TriangleMesh* mesh, JuliaFieldStats* stats)>;
+// MeshField on this process.
+bool LocalMesher(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary, FieldBand* band,
+                 TriangleMesh* mesh, JuliaFieldStats* stats);
+
+struct MeshStageResult {
+  bool writer = true;  // false on processes that do not write (the mesher's answer)
+  TriangleMesh mesh;   // in the output frame (user or fractal, rotation applied)
+  MeshingSummary summary;
+  MeshingOptions meshing;  // as used (the box filled in)
+  JuliaOptions julia;      // as used (the placement's centre filled in)
+  FieldBand band;          // with vdb grid "field"
+  std::int64_t escaped = 0, non_finite = 0;
+  bool empty() const { return mesh.triangles.empty(); }
+};
+
+// Meshes `map`'s Julia set. Throws quijibo::Error on invalid options.
+MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& options, const Mesher& mesher = LocalMesher);
+
+// Where the files go: `out` (.ply or .obj), and when not empty an extra OBJ and a .vdb.
+struct MeshFiles {
+  std::string out, obj, vdb;
+};
+// Fails early (before meshing) when a path has the wrong extension or its folder does not exist.
+void CheckMeshFiles(const MeshFiles& files);
+// Writes the mesh files (nothing for an empty set).
+void WriteMeshFiles(const MeshStageResult& result, const RationalMap& map, const MeshStageOptions& options,
+                    const MeshFiles& files);
+// The summary (summary.json of the run's mesh stage, the standard output of `quijibo mesh`).
+nlohmann::json MeshSummary(const MeshStageResult& result, const MeshStageOptions& options, const std::string& map_path,
+                           const MeshFiles& files);
+// The mesher's part of a summary: sizes, components, open edges (all, and away from the box
+// faces), specks, surface following, evaluations, tiles, blocks, seconds.
+nlohmann::json MesherSummaryJson(const MeshingSummary& summary, const MeshingOptions& options);
+// The Julia options as the summaries record them.
+nlohmann::json JuliaJson(const JuliaOptions& julia, double iso, const std::string& precision);
+
+}  // namespace quijibo::pipeline

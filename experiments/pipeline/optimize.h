@@ -1,0 +1,38 @@
+// The optimize stage: quijibo::Optimize (optim/optimizer.h) from an initial map on a target grid,
+// into its own folder (map.json, log.jsonl, summary.json, checkpoints; --resume continues).
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "optim/optimizer.h"
+#include "quijibo/grid.h"
+#include "quijibo/json_reader.h"
+#include "quijibo/rational_map.h"
+
+namespace quijibo::pipeline {
+
+struct OptimizeStageOptions {
+  std::string name = "optimized";  // the run's folder (unique among an experiment's optimizers)
+  OptimizeOptions optimizer;       // every setting of the optimization (out_dir, resume: the stage's)
+  nlohmann::json resolved;         // the settings as the experiment resolved them
+
+  // The experiment's optimizer object at `pointer`; `named`: "name" is required (an array entry).
+  static OptimizeStageOptions FromJson(const JsonReader& r, const std::string& pointer,
+                                       const std::filesystem::path& base, bool named);
+  nlohmann::json ToJson() const;  // with "name"
+};
+
+struct OptimizeStageResult {
+  RationalMap map;  // the optimized map (provenance "optimized" added)
+  OptimizeSummary summary;
+};
+
+// Optimizes `initial` on `target` into `out_dir` (initial_map.json, map.json, log.jsonl,
+// summary.json, checkpoint.json; optim/optimizer.h); with `resume`, continues from the checkpoint
+// there. An interrupted run (SIGINT/SIGTERM) throws quijibo::Error after writing its checkpoint.
+OptimizeStageResult OptimizeStage(const ScalarGrid& target, const RationalMap& initial,
+                                  const OptimizeStageOptions& options, const std::string& out_dir, bool resume);
+
+}  // namespace quijibo::pipeline

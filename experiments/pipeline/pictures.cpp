@@ -1,0 +1,113 @@
+#include "experiments/pipeline/pictures.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "experiments/pipeline/mesh.h"
+#include "mesh/julia_field.h"
+#include "mesh/sdf_command.h"
+#include "mesh/triangle_mesh.h"
+#include "quijibo/error.h"
+#include "quijibo/io.h"
+
+namespace quijibo::pipeline {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+const Schema<PicturesOptions>& PicturesOptions::Settings() {
+  using O = PicturesOptions;
+  static const Schema<O> s =
+      Schema<O>()
+          .Boolean("enabled", "", "Draw the pictures", [](auto& o) -> bool& { return o.enabled; })
+          .Integer(
+              "slice_iterations", "-n,--iterations", "Map applications n of the set against the target",
+              [](auto& o) -> int& { return o.slice_iterations; }, 1, 1000)
+          .Integer(
+              "slice_size", "--size", "Pixels along the longer side of the slice",
+              [](auto& o) -> int& { return o.slice.size; }, 16, 8192)
+          .Integer(
+              "render_size", "--size", "Pixels per view of the render", [](auto& o) -> int& { return o.render.size; },
+              16, 8192)
+          .Integer(
+              "render_views", "--views", "Views of the render: front, side, top, three-quarter",
+              [](auto& o) -> int& { return o.render.views; }, 1, 4);
+  return s;
+}
+
+std::string PicturesOptions::Validate() const { return Settings().Check(*this); }
+
+PicturesOptions PicturesOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
+                                          const PicturesOptions& start) {
+  PicturesOptions o = start;
+  Settings().Read(r, p, base, o);
+  return o;
+}
+
+json PicturesOptions::ToJson() const {
+  json j;
+  Settings().Write(*this, j);
+  return j;
+}
+
+SlicePicture SliceAgainstTargetPicture(const RationalMap& map, const ScalarGrid& target, const std::string& target_path,
+                                       const SliceView& view, const JuliaOptions& julia, double iso,
+                                       const std::string& precision) {
+  if (target.coordinates != "fractal")
+    throw Error(target_path + ": expected a grid in fractal coordinates, found \"" + target.coordinates + "\"");
+  const std::string frame_path = FrameJsonPathFor(target_path);
+  if (fs::exists(frame_path)) {
+    const FractalFrame f = ReadFrameJson(frame_path);
+    const auto same = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); };
+    if (!same(f.scale, map.frame.scale) || !same(f.fractal_radius, map.frame.fractal_radius) ||
+        !same(f.translation[0], map.frame.translation[0]) || !same(f.translation[1], map.frame.translation[1]) ||
+        !same(f.translation[2], map.frame.translation[2]))
+      throw Error(target_path + ": its frame (" + frame_path + ") differs from the map's: not the same mesh");
+  }
+  if (auto why = view.validate(); !why.empty()) throw Error("picture: " + why);
+  if (auto why = julia.validate(); !why.empty()) throw Error(why);
+  const BatchField field = MakeJuliaField(map, julia, iso, ParsePrecision(precision));
+  SlicePicture p;
+  p.image = SliceAgainstTarget(field, target, view, &p.agreement);
+  return p;
+}
+
+json SliceReport(const SlicePicture& p, const std::string& out, const JuliaOptions& julia, double iso,
+                 const std::string& precision) {
+  const SliceAgreement& a = p.agreement;
+  return {{"out", out},
+          {"agreement", a.agreement()},
+          {"both_inside", a.both_inside},
+          {"both_outside", a.both_outside},
+          {"julia_only", a.julia_only},
+          {"target_only", a.target_only},
+          {"julia", JuliaJson(julia, iso, precision)}};
+}
+
+SliceView TargetSliceView(const ScalarGrid& target, const PicturesOptions& o) {
+  SliceView v = o.slice;
+  const Vec3 lo = target.frame.min_corner, ext = target.frame.extent();
+  v.min_corner = lo;
+  v.max_corner = {lo[0] + ext[0], lo[1] + ext[1], lo[2] + ext[2]};
+  return v;
+}
+
+void Pictures(const PicturesOptions& o, const RationalMap& initial, const RationalMap& optimized,
+              const std::string& target_path, const std::string& mesh_path, const std::string& dir) {
+  if (auto why = o.Validate(); !why.empty()) throw Error("pictures: " + why);
+  const ScalarGrid target = ReadGrid(target_path);
+  const SliceView view = TargetSliceView(target, o);
+  JuliaOptions julia;
+  julia.iterations = o.slice_iterations;
+  const std::string n = std::to_string(o.slice_iterations);
+  for (const auto& [map, name] :
+       {std::pair{&optimized, std::string("slice")}, std::pair{&initial, std::string("initial-slice")}}) {
+    const std::string png = dir + "/" + name + "-n" + n + ".png";
+    const SlicePicture p = SliceAgainstTargetPicture(*map, target, target_path, view, julia, 0.0, "double");
+    WritePng(png, p.image);
+    WriteFileAtomically(dir + "/" + name + ".out", SliceReport(p, png, julia, 0.0, "double").dump(2) + "\n");
+  }
+  if (!mesh_path.empty()) WritePng(dir + "/render.png", RenderMesh(ReadMesh(mesh_path), o.render));
+}
+
+}  // namespace quijibo::pipeline

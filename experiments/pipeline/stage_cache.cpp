@@ -1,0 +1,156 @@
+#include "experiments/pipeline/stage_cache.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "quijibo/io.h"
+
+namespace quijibo::pipeline {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+// FNV-1a, 64 bit: stable across runs, compilers and machines (std::hash is not).
+struct Fnv1a {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  void add(const std::string& bytes) {
+    for (unsigned char c : bytes) {
+      h ^= c;
+      h *= 0x100000001b3ull;
+    }
+    // A separator, so ("ab", "c") and ("a", "bc") differ.
+    h ^= 0xff;
+    h *= 0x100000001b3ull;
+  }
+  std::string hex() const {
+    char buf[17];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+    return buf;
+  }
+};
+
+double Since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+std::string StageHash(const std::string& stage, const json& inputs, const std::vector<std::string>& files,
+                      const std::vector<std::string>& upstream) {
+  Fnv1a h;
+  h.add("quijibo-stage-v1");
+  h.add(stage);
+  h.add(inputs.dump());  // nlohmann's objects are sorted by key: canonical
+  for (const auto& f : files) {
+    Fnv1a file;
+    file.add(ReadFile(f));
+    h.add(file.hex());
+  }
+  for (const auto& u : upstream) h.add(u);
+  return h.hex();
+}
+
+json ReadStageFile(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return nullptr;
+  try {
+    return json::parse(ReadFile(path));
+  } catch (...) {
+    return nullptr;
+  }
+}
+
+StageCache::StageCache(std::string results, bool resume, std::function<void(const std::string&)> announce,
+                       std::function<void(const std::string&)> note, std::function<void(const StageRecord&)> done)
+    : results_(std::move(results)),
+      resume_(resume),
+      announce_(std::move(announce)),
+      note_(std::move(note)),
+      done_(std::move(done)) {}
+
+std::string StageCache::Run(const std::string& name, const std::string& folder, const json& inputs,
+                            const std::vector<std::string>& files, const std::vector<std::string>& upstream,
+                            const std::function<void(const std::string&)>& compute) {
+  announce_(name);
+  const std::string hash = StageHash(name, inputs, files, upstream);
+  const std::string dir = Path(folder);
+  const json old = ReadStageFile(dir + "/stage.json");
+  if (old.is_object() && old.value("hash", "") == hash && old.value("complete", false)) {
+    records_.push_back({name, "reused", hash, old.value("seconds", 0.0)});
+    done_(records_.back());
+    return hash;
+  }
+  const std::string partial = dir + ".partial";
+  fs::remove_all(partial);
+  fs::create_directories(partial);
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    compute(partial);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(partial, ec);
+    throw;
+  }
+  const double s = Since(t0);
+  WriteFileAtomically(
+      partial + "/stage.json",
+      json{{"stage", name}, {"hash", hash}, {"complete", true}, {"seconds", s}, {"inputs", inputs}}.dump(1) + "\n");
+  fs::remove_all(dir);
+  fs::rename(partial, dir);
+  records_.push_back({name, "ran", hash, s});
+  done_(records_.back());
+  return hash;
+}
+
+std::string StageCache::RunInPlace(const std::string& stage, const std::string& name, const std::string& title,
+                                   const std::string& folder, const json& inputs,
+                                   const std::vector<std::string>& upstream,
+                                   const std::function<void(const std::string&, bool)>& compute) {
+  announce_(title);
+  const std::string hash = StageHash(stage, inputs, {}, upstream);
+  const std::string dir = Path(folder);
+  const json old = ReadStageFile(dir + "/stage.json");
+  if (old.is_object() && old.value("hash", "") == hash && old.value("complete", false)) {
+    records_.push_back({name, "reused", hash, old.value("seconds", 0.0)});
+    done_(records_.back());
+    return hash;
+  }
+  const json pending = ReadStageFile(dir + "/stage.pending.json");
+  std::error_code ec;
+  const bool can_resume = resume_ && pending.is_object() && pending.value("hash", "") == hash &&
+                          fs::is_regular_file(dir + "/checkpoint.json", ec);
+  if (resume_ && !can_resume) note_("no checkpoint of these settings in " + dir + ": starting the optimization afresh");
+  double earlier = 0;
+  if (!can_resume) {
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    WriteFileAtomically(dir + "/stage.pending.json", json{{"stage", stage}, {"hash", hash}}.dump() + "\n");
+  } else {
+    earlier = pending.value("seconds", 0.0);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    compute(dir, can_resume);
+  } catch (...) {
+    // Keep the folder (checkpoint) for --resume; remember the time spent.
+    try {
+      WriteFileAtomically(dir + "/stage.pending.json",
+                          json{{"stage", stage}, {"hash", hash}, {"seconds", earlier + Since(t0)}}.dump() + "\n");
+    } catch (...) {
+    }
+    throw;
+  }
+  const double s = earlier + Since(t0);
+  WriteFileAtomically(
+      dir + "/stage.json",
+      json{{"stage", stage}, {"hash", hash}, {"complete", true}, {"seconds", s}, {"inputs", inputs}}.dump(1) + "\n");
+  fs::remove(dir + "/stage.pending.json");
+  records_.push_back({name, can_resume ? "resumed" : "ran", hash, s});
+  done_(records_.back());
+  return hash;
+}
+
+}  // namespace quijibo::pipeline

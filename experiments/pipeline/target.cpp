@@ -1,0 +1,146 @@
+#include "experiments/pipeline/target.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+
+#include "mesh/sdf.h"
+#include "mesh/sdf_command.h"
+#include "quijibo/error.h"
+#include "quijibo/target.h"
+
+namespace quijibo::pipeline {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+bool IsMeshPath(const std::string& s) {
+  std::string e = fs::path(s).extension().string();
+  for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return e == ".obj" || e == ".ply" || e == ".stl" || e == ".off";
+}
+
+}  // namespace
+
+std::string TargetOptions::kind() const {
+  if (!mesh.empty()) return "mesh";
+  if (!qgrid.empty()) return "qgrid";
+  if (!analytic.empty()) return "analytic";
+  return "";
+}
+
+const Schema<TargetOptions>& TargetOptions::Settings() {
+  static const Schema<TargetOptions> s =
+      Schema<TargetOptions>()
+          .Path("mesh", "", "A mesh (.obj, .ply, .stl, .off)", [](auto& o) -> std::string& { return o.mesh; })
+          .When([](const TargetOptions& o) { return !o.mesh.empty(); })
+          .Path("qgrid", "", "A signed distance grid from `quijibo sdf` (fractal frame)",
+                [](auto& o) -> std::string& { return o.qgrid; })
+          .When([](const TargetOptions& o) { return !o.qgrid.empty(); })
+          .String("analytic", "", "An analytic shape: sphere[:radius=R], torus[:major=R,minor=r]",
+                  [](auto& o) -> std::string& { return o.analytic; })
+          .When([](const TargetOptions& o) { return !o.analytic.empty(); })
+          .Integer(
+              "resolution", "-r,--resolution", "Target grid cells per axis",
+              [](auto& o) -> int& { return o.resolution; }, 8, 1024)
+          .Number(
+              "padding", "--padding", "Normalization padding: the mesh's longest side spans 1 - 2 padding",
+              [](auto& o) -> double& { return o.padding; }, 0.0, 0.4999)
+          .Number(
+              "fractal_radius", "--fractal-radius", "Fractal frame scale: w = fractal_radius (p - origin)",
+              [](auto& o) -> double& { return o.fractal_radius; }, 0.0, 1e4, true)
+          .Enum(
+              "box", "--target-box",
+              "unit: the whole unit cube, a margin of `padding` around the shape; reference: the reference code's "
+              "box, the shape plus one cell (quijibo/frame.h)",
+              {"unit", "reference"}, [](const TargetOptions& o) { return TargetBoxName(o.box); },
+              [](TargetOptions& o, const std::string& v) { o.box = ParseTargetBox(v); })
+          .When([](const TargetOptions& o) { return !o.mesh.empty(); })
+          .Enum(
+              "origin", "--origin",
+              "inside: the fractal origin at the point deepest inside the shape, where iterating the map traps "
+              "orbits; center: at the bounding box's centre, as the reference code (mesh/normalize.h)",
+              {"inside", "center"},
+              [](const TargetOptions& o) { return OriginPlacementName(o.origin.value_or(OriginPlacement::kCenter)); },
+              [](TargetOptions& o, const std::string& v) { o.origin = ParseOriginPlacement(v); })
+          .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin.has_value(); });
+  return s;
+}
+
+std::string TargetOptions::Validate() const {
+  const int kinds = !mesh.empty() + !qgrid.empty() + !analytic.empty();
+  if (kinds != 1) return "expected exactly one of \"mesh\", \"qgrid\" or \"analytic\"";
+  if (!mesh.empty() && !IsMeshPath(mesh)) return "mesh: expected a .obj, .ply, .stl or .off file, found " + mesh;
+  return Settings().Check(*this);
+}
+
+TargetOptions TargetOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
+                                      const TargetOptions& start) {
+  TargetOptions o = start;
+  o.mesh.clear(), o.qgrid.clear(), o.analytic.clear();
+  if (!r.has(p)) r.fail(p, "missing: an object with \"mesh\", \"qgrid\" or \"analytic\"");
+  if (!r.at(p).is_object()) r.fail(p, "expected an object, found " + JsonReader::describe(r.at(p)));
+  int kinds = 0;
+  for (const char* k : {"mesh", "qgrid", "analytic"}) kinds += r.has(p + "/" + k);
+  if (kinds != 1) r.fail(p, "expected exactly one of \"mesh\", \"qgrid\" or \"analytic\"");
+  // The kind first: the other settings depend on it.
+  if (r.has(p + "/mesh")) o.mesh = "?";
+  if (r.has(p + "/qgrid")) o.qgrid = "?";
+  if (r.has(p + "/analytic")) o.analytic = "?";
+  const std::string kind = o.kind();
+  if (r.has(p + "/kind") && r.string(p + "/kind") != kind)
+    r.fail(p + "/kind", "expected \"" + kind + "\" (the target's key), found \"" + r.string(p + "/kind") + "\"");
+  if (kind != "mesh" && r.has(p + "/box"))
+    r.fail(p + "/box", "only mesh targets choose their box (analytic targets use the reference box)");
+  if ((kind != "mesh" || !o.origin) && r.has(p + "/origin"))
+    r.fail(p + "/origin", "only QUIJIBO mesh targets place the fractal origin");
+  Settings().Read(r, p, base, o, {"kind"});
+  if (kind == "mesh" && !IsMeshPath(o.mesh))
+    r.fail(p + "/mesh", "expected a .obj, .ply, .stl or .off file, found " + o.mesh);
+  if (kind == "analytic" && o.analytic.empty())
+    r.fail(p + "/analytic", "expected a shape such as \"sphere\" or \"torus:major=1,minor=0.3\"");
+  return o;
+}
+
+json TargetOptions::ToJson() const {
+  json j = {{"kind", kind()}};
+  Settings().Write(*this, j);
+  return j;
+}
+
+TargetResult Target(const TargetOptions& o) {
+  if (const std::string why = o.Validate(); !why.empty()) throw Error("target: " + why);
+  TargetResult t;
+  if (!o.mesh.empty()) {
+    const TriangleMesh user = ReadMesh(o.mesh, &t.read_report);
+    t.frame = NormalizationFor(user, o.padding, o.fractal_radius);
+    if (o.origin == OriginPlacement::kInside) t.frame = PlaceOriginInside(user, t.frame, o.mesh);
+    t.mesh = ToFractalFrame(user, t.frame);
+    SdfOptions sdf;
+    sdf.name = o.mesh;
+    const auto t0 = std::chrono::steady_clock::now();
+    t.grid = SignedDistance(t.mesh, TargetGridFrame(o.resolution, t.frame, o.box), sdf);
+    t.sdf_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    t.source = o.mesh;
+  } else if (!o.qgrid.empty()) {
+    t.grid = ReadGrid(o.qgrid);
+    const std::string fp = FrameJsonPathFor(o.qgrid);
+    if (fs::exists(fp)) t.frame = ReadFrameJson(fp);
+    t.source = o.qgrid;
+  } else {
+    // Analytic shapes live in the default frame, on the reference box.
+    t.grid = AnalyticTarget(o.analytic, TargetGridFrame(o.resolution, t.frame));
+    t.source = "analytic:" + o.analytic;
+  }
+  return t;
+}
+
+void WriteTarget(const TargetResult& t, const TargetOptions& o, const std::string& dir) {
+  const std::string grid = dir + "/target.qgrid";
+  WriteGrid(grid, t.grid);
+  WriteFrameJson(FrameJsonPathFor(grid), t.frame, t.source, o.mesh.empty() ? t.grid.frame.dims[0] : o.resolution);
+}
+
+}  // namespace quijibo::pipeline
