@@ -6,7 +6,9 @@
 //                      "absolute" lines every `absolute_every` iterations and at pass ends (psi on
 //                      the finest grid with the original weights, always by the exact log-linear
 //                      evaluator so curves of all precisions compare), pass start/end lines
-//   checkpoint.json    every `checkpoint_every` iterations, at pass ends and on SIGINT/SIGTERM
+//   checkpoint.json    every `checkpoint_every` iterations, at pass ends, on SIGINT/SIGTERM and when
+//                      a callback aborts; with the fingerprint of the settings, the target and the
+//                      initial map that --resume must match (optim/checkpoint.h)
 //   map_level_<N>.json the map after each level;  map.json  the result (see below)
 //   summary.json       each pass's stop reason, iterations, evaluations, time and energies
 //
@@ -158,8 +160,9 @@ struct OptimizeSummary {
 
 // Runs the schedule from `map` (its exponents, ln C, tau, beta are the start; its roots stay) on
 // the target `sdf`; `map` holds the result (the best map, see above) on return. Throws
-// quijibo::Error on bad input. When a
-// SIGINT/SIGTERM arrives, writes a checkpoint and returns with complete = false.
+// quijibo::Error on bad input, and with options.resume on a checkpoint written with other settings,
+// another target or another initial map. When a SIGINT/SIGTERM arrives or a callback aborts,
+// writes a checkpoint and returns with complete = false.
 OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options);
 
 }  // namespace quijibo

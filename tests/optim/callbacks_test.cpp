@@ -18,8 +18,11 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+// A folder of this test's own (ctest runs test cases in parallel).
 std::string Dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("quijibo_callbacks_" + name);
+  const fs::path d = fs::temp_directory_path() /
+                     ("quijibo_callbacks_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+                      "_" + name);
   fs::remove_all(d);
   return d.string();
 }

@@ -18,7 +18,10 @@ constexpr int kTestExitCode = 86;  // optimizer.cpp's hard exit (QUIJIBO_TEST_EX
 class OptimizeCommand : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = (fs::temp_directory_path() / "quijibo_optimize_command").string();
+    // A folder of this test's own (ctest runs test cases in parallel).
+    dir_ = (fs::temp_directory_path() /
+            ("quijibo_optimize_command_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name())))
+               .string();
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     map_ = dir_ + "/init.json";
