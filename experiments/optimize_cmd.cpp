@@ -18,7 +18,7 @@ void AddOptimizeCommand(CLI::App& app) {
     double memory_budget_gb = 8.0;
     int target_resolution = 97, memory = 5, absolute_every = 10, checkpoint_every = 25;
     int max_v = 200, max_f = 2000, max_r = 2000;
-    double tolerance = 1e-5, alpha = 10;
+    double tolerance = 1e-5, alpha = 10, min_level_fidelity = OptimizeOptions{}.min_level_fidelity;
     bool resume = false;
   };
   auto a = std::make_shared<Args>();
@@ -58,6 +58,11 @@ void AddOptimizeCommand(CLI::App& app) {
                 "last: from the last pass's map (the paper, the reference code)")
       ->capture_default_str()
       ->check(CLI::IsMember({"best", "last"}));
+  c->add_option("--min-level-fidelity", a->min_level_fidelity,
+                "A level runs at the smallest resolution (up to the finest) whose grid represents the target with "
+                "at least this IoU (0: the schedule as written)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   c->add_option("--target-resolution", a->target_resolution, "Grid of an analytic target")->capture_default_str();
   c->add_option("--alpha", a->alpha, "Sharpness of tanh")->capture_default_str();
   c->add_option("--memory", a->memory, "L-BFGS correction pairs")->capture_default_str();
@@ -93,6 +98,7 @@ void AddOptimizeCommand(CLI::App& app) {
     o.weights = ParseWeightField(a->weights);
     o.level_weights = a->level_weights == "sample" ? LevelWeights::kSampleFinest : LevelWeights::kRecompute;
     o.level_start = ParseLevelStart(a->level_start);
+    o.min_level_fidelity = a->min_level_fidelity;
     o.energy.alpha = a->alpha;
     o.memory = a->memory;
     o.loglinear.storage = ParseStorage(a->storage);

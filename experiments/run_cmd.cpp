@@ -157,7 +157,7 @@ void ReadOptimizer(Reader& rd, const std::string& p, const fs::path& base, bool 
   const JsonReader& r = rd.r();
   if (!r.at(p).is_object()) r.fail(p, "expected an object, found " + JsonReader::describe(r.at(p)));
   r.allow_keys(p, {"name", "schedule", "backend", "evaluator", "precision", "weights", "level_weights", "level_start",
-                   "alpha", "memory", "tolerance", "max_iterations", "checkpoint_every", "absolute_every", "storage",
+                   "min_level_fidelity", "alpha", "memory", "tolerance", "max_iterations", "checkpoint_every", "absolute_every", "storage",
                    "memory_budget_gb"});
   if (named) {
     const std::string name = rd.Str(p + "/name", "");
@@ -174,6 +174,7 @@ void ReadOptimizer(Reader& rd, const std::string& p, const fs::path& base, bool 
   rd.Str(p + "/weights", WeightFieldName(OptimizeOptions{}.weights), {"layer", "inverse", "balanced"});
   rd.Str(p + "/level_weights", "sample", {"sample", "recompute"});
   rd.Str(p + "/level_start", LevelStartName(OptimizeOptions{}.level_start), {"best", "last"});
+  rd.Num(p + "/min_level_fidelity", OptimizeOptions{}.min_level_fidelity, 0.0, 1.0);
   rd.Str(p + "/storage", "auto", {"auto", "double", "float", "on-the-fly"});
   rd.Num(p + "/alpha", 10.0, 0.0, 1e6, true);
   rd.Int(p + "/memory", 5, 1, 100);
@@ -735,6 +736,7 @@ std::string Runner::Optimize(const json& o, const std::string& initial_hash) {
                                    "--weights", o["weights"],
                                    "--level-weights", o["level_weights"],
                                    "--level-start", o["level_start"],
+                                   "--min-level-fidelity=" + Num(o["min_level_fidelity"]),
                                    "--storage", o["storage"],
                                    "--alpha=" + Num(o["alpha"]),
                                    "--memory", Int(o["memory"]),

@@ -65,6 +65,8 @@ std::string OptimizeOptions::validate() const {
   if (backend == "ceres" && precision != Precision::kDouble) return "the ceres back end runs in double only";
   if (memory < 1 || memory > 100) return "memory must be in [1, 100]";
   if (absolute_every < 1) return "absolute_every must be >= 1";
+  if (!(min_level_fidelity >= 0 && min_level_fidelity <= 1))
+    return "min_level_fidelity must be in [0, 1], found " + std::to_string(min_level_fidelity);
   if (checkpoint_every < 1) return "checkpoint_every must be >= 1";
   if (out_dir.empty()) return "an output folder is required";
   if (auto why = energy.validate(); !why.empty()) return why;
@@ -114,11 +116,15 @@ PassSummary PassSummary::FromJson(const json& j) {
 json OptimizeSummary::ToJson(const OptimizeOptions& o) const {
   json passes = json::array();
   for (const PassSummary& p : this->passes) passes.push_back(p.ToJson());
+  json levels_json = json::array();
+  for (const Level& l : levels)
+    levels_json.push_back({{"scheduled", l.scheduled}, {"resolution", l.resolution}, {"fidelity", l.fidelity}});
   return {{"schedule", o.schedule.ToJson()}, {"evaluator", o.evaluator},
           {"precision", PrecisionName(o.precision)}, {"backend", o.backend},
           {"weights", WeightFieldName(o.weights)},
           {"level_weights", o.level_weights == LevelWeights::kSampleFinest ? "sample" : "recompute"},
-          {"level_start", LevelStartName(o.level_start)},
+          {"level_start", LevelStartName(o.level_start)}, {"min_level_fidelity", o.min_level_fidelity},
+          {"levels", levels_json},
           {"alpha", o.energy.alpha}, {"memory", o.memory}, {"complete", complete},
           {"seconds", seconds}, {"absolute_start", absolute_start}, {"absolute_end", absolute_end},
           {"best_pass", best_pass}, {"passes", passes}};
@@ -151,6 +157,14 @@ std::string OptimizeSummary::Report() const {
                     p.level, p.kind, 100.0 * p.band.value("work_fraction", 0.0),
                     100.0 * p.band.value("mean_fraction", 0.0), p.band.value("cells", 0LL),
                     p.band.value("anchors", 0LL), p.band.value("energy_error", 0.0));
+      s << line;
+    }
+  for (const Level& l : levels)
+    if (l.resolution != l.scheduled) {
+      std::snprintf(line, sizeof line,
+                    "level %d ran at %d: at %d^3 the target is not represented (level fidelity below the "
+                    "minimum); at %d^3 its fidelity is %.3f\n",
+                    l.scheduled, l.resolution, l.scheduled, l.resolution, l.fidelity);
       s << line;
     }
   for (const PassSummary& p : passes)
@@ -382,6 +396,15 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   // The finest grid with the original weights: the absolute energy and the reweighting.
   const std::vector<double> finest_w = ComputeWeights(sdf, o.weights);
   EnergyGrid finest = MakeEnergyGrid(sdf, finest_w, o.weights, 0, LevelWeights::kSampleFinest, 0.0);
+  // The resolution each level runs at (deterministic, so a resumed run finds the same).
+  summary.levels.clear();
+  for (const LevelSpec& level : o.schedule.levels) {
+    OptimizeSummary::Level l;
+    l.scheduled = level.resolution;
+    l.resolution = ResolvedLevelResolution(sdf, finest_w, o.weights, level.resolution, o.level_weights,
+                                           o.min_level_fidelity, &l.fidelity);
+    summary.levels.push_back(l);
+  }
   LogLinearEnergy absolute(map, finest, o.energy, o.loglinear);
   auto absolute_energy = [&](const Vector& xs) {
     absolute.SetWeights(finest.weight, finest.eta);
@@ -432,7 +455,8 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   SignalGuard signals;
   bool interrupted = false;
   for (int li = start_level; li < int(o.schedule.levels.size()) && !interrupted; ++li) {
-    const LevelSpec& level = o.schedule.levels[li];
+    LevelSpec level = o.schedule.levels[li];
+    level.resolution = summary.levels[std::size_t(li)].resolution;
     const EnergyGrid grid = MakeEnergyGrid(sdf, finest_w, o.weights, level.resolution, o.level_weights, 0.0);
     // At the finest level the log-linear evaluator shares the absolute one's matrix.
     const bool share = loglinear && grid.frame == finest.frame;
@@ -449,6 +473,10 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     if (!objective) objective = std::make_unique<CachedObjective<Scalar>>(map, grid, o.energy);
 
     const int first_pass = li == start_level ? start_pass : 0;
+    const OptimizeSummary::Level& raised = summary.levels[std::size_t(li)];
+    if (raised.resolution != raised.scheduled && !(li == start_level && (start_pass > 0 || start_iteration > 0)))
+      emit({{"type", "level_raised"}, {"level_index", li}, {"scheduled", raised.scheduled},
+            {"level", raised.resolution}, {"fidelity", raised.fidelity}, {"step", step}});
     if (o.level_start == OptimizeOptions::LevelStart::kBest && li > 0 && first_pass == 0 &&
         summary.best_pass + 1 != int(summary.passes.size())) {
       x = best_x;

@@ -58,6 +58,13 @@ struct OptimizeOptions {
   // kBest threw away coarse F/R progress the finer level needed (one-step IoU 0.76 vs 0.88).
   enum class LevelStart { kBest, kLast };
   LevelStart level_start = LevelStart::kLast;
+  // A level runs at the smallest resolution, from its scheduled one up to the finest, whose grid
+  // represents the target with LevelFidelity >= this (quijibo/target.h): a level whose cells are
+  // wider than the target's walls or fingers fits another shape, and its passes move the map
+  // away from the target (docs/fidelity.md §6). 0.8 is the quality asked of the result (one-step
+  // IoU >= 0.8): a level that cannot reach it itself cannot lead there. 0: the schedule as written
+  // (the paper, the reference code).
+  double min_level_fidelity = 0.8;
   int memory = 5;              // L-BFGS correction pairs (reference: 5)
   int absolute_every = 10;     // iterations between absolute-energy log lines
   int checkpoint_every = 25;   // iterations between checkpoints (and L-BFGS memory restarts)
@@ -91,6 +98,13 @@ struct OptimizeSummary {
   double absolute_end = 0;   // of the returned map: the best over the start and the pass ends
   int best_pass = -1;        // index into passes of the returned map; -1: the start
   bool complete = false;     // false when interrupted
+  // Each level: its scheduled resolution, the one it ran at (min_level_fidelity) and the
+  // LevelFidelity of the latter.
+  struct Level {
+    int scheduled = 0, resolution = 0;
+    double fidelity = 1;
+  };
+  std::vector<Level> levels;
   nlohmann::json ToJson(const OptimizeOptions& options) const;
   std::string Report() const;  // a readable table
   std::string BestPassName() const;  // "the map after level 25 pass F (pass 2 of 10)" or the start
