@@ -152,77 +152,18 @@ class Reader {
 const std::vector<std::string> kTopKeys = {"name", "description", "method", "seed", "target", "initial",
                                            "optimizer", "mesh", "pictures", "outputs", "modulus", "portal"};
 
-// One optimizer run: its settings resolved (the schedule in its JSON form).
+// One optimizer run: its settings resolved by OptimizeOptions (the schedule in its JSON form).
 void ReadOptimizer(Reader& rd, const std::string& p, const fs::path& base, bool named) {
   const JsonReader& r = rd.r();
-  if (!r.at(p).is_object()) r.fail(p, "expected an object, found " + JsonReader::describe(r.at(p)));
-  r.allow_keys(p, {"name", "schedule", "backend", "evaluator", "precision", "weights", "level_weights", "level_start",
-                   "min_level_fidelity", "alpha", "memory", "tolerance", "max_iterations", "checkpoint_every", "absolute_every", "storage",
-                   "memory_budget_gb"});
+  json resolved = OptimizeOptions::FromJson(r, p, base, {"name"}).ToJson();
   if (named) {
     const std::string name = rd.Str(p + "/name", "");
     if (name.empty() || name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") !=
                             std::string::npos)
       r.fail(p + "/name", "expected a non-empty name of letters, digits, '-', '_' or '.' (it names a folder)");
+    resolved["name"] = name;
   }
-  rd.Str(p + "/backend", "lbfgspp", {"lbfgspp", "ceres"});
-  const std::string ev = rd.Str(p + "/evaluator", OptimizeOptions{}.evaluator, kEvaluatorNames);
-  const std::string pr = rd.Str(p + "/precision", "double", {"float", "double", "long-double", "float128"});
-  if (ResolveEvaluator(ev, ParsePrecision(pr)) != "cached" && pr != "double")
-    r.fail(p + "/precision", "the loglinear evaluator runs in double only; use \"evaluator\": \"cached\" for \"" +
-                                 pr + "\"");
-  rd.Str(p + "/weights", WeightFieldName(OptimizeOptions{}.weights), {"layer", "inverse", "balanced"});
-  rd.Str(p + "/level_weights", "sample", {"sample", "recompute"});
-  rd.Str(p + "/level_start", LevelStartName(OptimizeOptions{}.level_start), {"best", "last"});
-  rd.Num(p + "/min_level_fidelity", OptimizeOptions{}.min_level_fidelity, 0.0, 1.0);
-  rd.Str(p + "/storage", "auto", {"auto", "double", "float", "on-the-fly"});
-  rd.Num(p + "/alpha", 10.0, 0.0, 1e6, true);
-  rd.Int(p + "/memory", 5, 1, 100);
-  rd.Num(p + "/memory_budget_gb", 8.0, 0.0, 1e6);
-  rd.Int(p + "/checkpoint_every", 25, 1, 1000000);
-  rd.Int(p + "/absolute_every", 10, 1, 1000000);
-  const double tol = rd.Num(p + "/tolerance", 1e-5, 0.0, 1e6);
-  PassSpec defaults[3] = {DefaultPass(PassKind::kVariable), DefaultPass(PassKind::kFull),
-                          DefaultPass(PassKind::kReweighted)};
-  if (r.has(p + "/max_iterations")) r.allow_keys(p + "/max_iterations", {"V", "F", "R"});
-  const char* kinds[3] = {"V", "F", "R"};
-  for (int k = 0; k < 3; ++k) {
-    const std::string mp = p + "/max_iterations/" + kinds[k];
-    defaults[k].max_iterations = int(rd.Int(mp, defaults[k].max_iterations, 1, 10000000));
-    defaults[k].tolerance = tol;
-  }
-  // The schedule: notation, a JSON object, or a .json file holding one.
-  const std::string sp = p + "/schedule";
-  Schedule schedule;
-  if (!r.has(sp)) {
-    schedule = Schedule::Parse("25(VFRF)50(VFRF)97(VF)", defaults);
-  } else {
-    const json& node = r.at(sp);
-    if (node.is_string()) {
-      const std::string s = node.get<std::string>();
-      if (s.find_first_not_of(" \t") == std::string::npos) r.fail(sp, "expected a schedule, found an empty string");
-      if (s.ends_with(".json")) {
-        const std::string file = Resolve(base, s);
-        if (!fs::is_regular_file(file)) r.fail(sp, "no such schedule file: " + file);
-        const json doc = ParseJson(ReadFile(file), file);
-        schedule = Schedule::FromJson(JsonReader(doc, file), "");
-      } else {
-        try {
-          schedule = Schedule::Parse(s, defaults);
-        } catch (const Error& e) {
-          r.fail(sp, e.what());
-        }
-      }
-    } else if (node.is_object()) {
-      if (node.empty()) r.fail(sp, "expected a schedule, found an empty object");
-      schedule = Schedule::FromJson(r, sp);
-    } else {
-      r.fail(sp, "expected a schedule (notation string, JSON object or .json file), found " +
-                     JsonReader::describe(node));
-    }
-  }
-  if (schedule.levels.empty()) r.fail(sp, "the schedule has no levels");
-  rd.out()[json::json_pointer(sp)] = schedule.ToJson();
+  rd.out()[json::json_pointer(p)] = resolved;
 }
 
 // Modulus/portal output settings.
