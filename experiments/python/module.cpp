@@ -14,9 +14,13 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <stdlib.h>
+
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -26,10 +30,12 @@
 #include "mesh/julia_field.h"
 #include "mesh/marching_cubes.h"
 #include "mesh/triangle_mesh.h"
+#include "optim/optimizer.h"
 #include "quijibo/energy.h"
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
 #include "quijibo/grid.h"
+#include "quijibo/json_reader.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/rational_map.h"
 #include "quijibo/real.h"
@@ -393,6 +399,98 @@ MeshResult Mesh(const RationalMap& map, int resolution, int iterations, double e
   return FromTriangleMesh(mesh, FromJson(summary));
 }
 
+// ---------------------------------------------------------------------------------------------
+// optimize
+
+// Hands every record of the run (a log.jsonl line, as a dict) to a Python callable; a true result
+// aborts the run (optim/iteration_callback.h), an exception aborts it and is raised afterwards.
+class PythonCallback : public IterationCallback {
+ public:
+  // Made and destroyed with the GIL held.
+  explicit PythonCallback(py::object fn) : fn_(std::move(fn)) {}
+  CallbackReturnType operator()(const IterationSummary& s) override {
+    if (stopped_) return CallbackReturnType::kAbort;
+    py::gil_scoped_acquire gil;
+    try {
+      if (py::bool_(fn_(FromJson(s.ToJson())))) stopped_ = true;
+    } catch (py::error_already_set& e) {
+      error_ = std::make_unique<py::error_already_set>(std::move(e));
+      stopped_ = true;
+    }
+    return stopped_ ? CallbackReturnType::kAbort : CallbackReturnType::kContinue;
+  }
+  // With the GIL held: the callback's exception, if it raised one.
+  void Rethrow() {
+    if (error_) {
+      auto e = std::move(error_);
+      throw py::error_already_set(*e);
+    }
+  }
+
+ private:
+  py::object fn_;
+  bool stopped_ = false;
+  std::unique_ptr<py::error_already_set> error_;
+};
+
+// A temporary folder for runs without `out`, removed with everything in it.
+class TemporaryFolder {
+ public:
+  TemporaryFolder() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "quijibo-optimize-XXXXXX").string();
+    if (!::mkdtemp(pattern.data())) throw Error(pattern + ": cannot create a temporary folder: " + std::strerror(errno));
+    path_ = pattern;
+  }
+  ~TemporaryFolder() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+py::tuple OptimizeMap(const ScalarGrid& target, const RationalMap& initial, py::object schedule, py::object callback,
+                      py::object out, bool resume, py::kwargs settings) {
+  CheckMap(initial, "optimize");
+  json j = ToJson(settings, "optimize");
+  if (!schedule.is_none()) j["schedule"] = ToJson(schedule, "optimize/schedule");
+  OptimizeOptions options = OptimizeOptions::FromJson(JsonReader(j, "optimize"), "", std::filesystem::current_path());
+  std::unique_ptr<TemporaryFolder> temporary;
+  if (out.is_none()) {
+    if (resume) throw Error("optimize: resume=True needs the folder of the interrupted run (out=...)");
+    temporary = std::make_unique<TemporaryFolder>();
+    options.out_dir = temporary->path();
+  } else {
+    options.out_dir = ToJson(out, "optimize/out").get<std::string>();
+  }
+  options.resume = resume;
+  std::unique_ptr<PythonCallback> observer;
+  if (!callback.is_none()) {
+    if (!PyCallable_Check(callback.ptr())) throw Error("optimize: callback must be callable");
+    observer = std::make_unique<PythonCallback>(callback);
+    options.callbacks.push_back(observer.get());
+  }
+  if (auto why = options.Validate(); !why.empty()) throw Error("optimize: " + why);
+  RationalMap map = initial;
+  OptimizeSummary summary;
+  {
+    py::gil_scoped_release release;
+    summary = Optimize(target, map, options);
+  }
+  if (observer) observer->Rethrow();
+  if (!summary.complete && summary.stop_reason == "interrupted") {
+    const std::string where = temporary ? "" : "; checkpoint written to " + options.out_dir +
+                                                    "/checkpoint.json, continue with resume=True";
+    PyErr_SetString(PyExc_KeyboardInterrupt, ("optimize: interrupted" + where).c_str());
+    throw py::error_already_set();
+  }
+  json report = summary.ToJson(options);
+  if (!summary.complete) report["stop_reason"] = summary.stop_reason;
+  return py::make_tuple(map, FromJson(report));
+}
+
 }  // namespace
 }  // namespace quijibo::python
 
@@ -720,6 +818,16 @@ PYBIND11_MODULE(quijibo, m) {
       py::arg("mesh"), py::arg("path"), py::kw_only(), py::arg("double") = false,
       "Write a Mesh (or a (vertices, faces) pair) as binary PLY (float, or double with double=True) or OBJ, "
       "atomically.");
+  m.def("optimize", &OptimizeMap, py::arg("target"), py::arg("map"), py::arg("schedule") = py::none(),
+        py::arg("callback") = py::none(), py::kw_only(), py::arg("out") = py::none(), py::arg("resume") = false,
+        "Optimize `map`'s exponents, ln C, tau and beta on the signed distance Grid `target` (`quijibo optimize`; "
+        "the map is not changed). `schedule`: the paper's notation, a dict (the JSON form) or a .json path; other "
+        "settings as keywords with the experiment's names (alpha=, evaluator=, weights=, max_iterations={'F': 50}, "
+        "...). `callback(record)` gets every record of the run (a dict: the log.jsonl line) and returns True to "
+        "stop. `out`: the folder for log.jsonl, summary.json and checkpoints (default: a temporary folder, "
+        "removed); resume=True continues the interrupted run there. Returns (map, summary): the best map and "
+        "summary.json as a dict ('complete' False and 'stop_reason' when a callback stopped it). Ctrl-C writes a "
+        "checkpoint and raises KeyboardInterrupt.");
   m.def("mesh", &Mesh, py::arg("map"), py::arg("resolution") = MeshingOptions{}.resolution,
         py::arg("iterations") = JuliaOptions{}.iterations, py::kw_only(),
         py::arg("escape") = JuliaOptions{}.escape_radius, py::arg("iso") = 0.0, py::arg("frame") = "user",
