@@ -1,26 +1,26 @@
 #include "optim/optimizer.h"
 
 #include <algorithm>
-#include <cerrno>
 #include <csignal>
 #include <cstring>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <sstream>
 #include <unistd.h>
 
 #include "optim/ceres_backend.h"
+#include "optim/checkpoint.h"
+#include "optim/jsonl_log.h"
 #include "optim/lbfgsb.h"
-#include "optim/reweight.h"
+#include "optim/pass_weights.h"
+#include "optim/progress_line.h"
+#include "optim/run_state.h"
 #include "quijibo/band_energy.h"
 #include "quijibo/cached_energy.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
-#include "quijibo/json_reader.h"
-#include "quijibo/progress.h"
 
 namespace quijibo {
 
@@ -37,88 +37,18 @@ std::string StopReasonName(StopReason r) {
   return "?";
 }
 
-OptimizeOptions::LevelStart ParseLevelStart(const std::string& name) {
-  if (name == "best") return OptimizeOptions::LevelStart::kBest;
-  if (name == "last") return OptimizeOptions::LevelStart::kLast;
-  throw Error("unknown level start \"" + name + "\" (expected best or last)");
-}
-
-std::string LevelStartName(OptimizeOptions::LevelStart s) {
-  return s == OptimizeOptions::LevelStart::kBest ? "best" : "last";
-}
-
-std::string ResolveEvaluator(const std::string& name, Precision precision) {
-  if (name == "auto") return precision == Precision::kDouble ? "band" : "cached";
-  if (name == "loglinear") return "dense";
-  if (name == "band" || name == "dense" || name == "cached") return name;
-  throw Error("unknown evaluator \"" + name + "\": expected auto, band, dense (loglinear) or cached");
-}
-
-std::string OptimizeOptions::validate() const {
-  if (auto why = schedule.validate(); !why.empty()) return why;
-  if (std::find(kEvaluatorNames.begin(), kEvaluatorNames.end(), evaluator) == kEvaluatorNames.end())
-    return "evaluator must be auto, band, dense (loglinear) or cached";
-  if (ResolveEvaluator(evaluator, precision) != "cached" && precision != Precision::kDouble)
-    return "the loglinear evaluator (band or dense) runs in double only";
-  if (backend != "lbfgspp" && backend != "ceres")
-    return "unknown back end \"" + backend + "\" (available: lbfgspp, ceres)";
-  if (backend == "ceres" && precision != Precision::kDouble) return "the ceres back end runs in double only";
-  if (memory < 1 || memory > 100) return "memory must be in [1, 100]";
-  if (absolute_every < 1) return "absolute_every must be >= 1";
-  if (checkpoint_every < 1) return "checkpoint_every must be >= 1";
-  if (out_dir.empty()) return "an output folder is required";
-  if (auto why = energy.validate(); !why.empty()) return why;
-  return {};
-}
-
-json PassSummary::ToJson() const {
-  return {{"level", level}, {"level_index", level_index}, {"pass_index", pass_index},
-          {"pass", std::string(1, kind)}, {"stop", stop}, {"iterations", iterations},
-          {"evaluations", evaluations}, {"seconds", seconds}, {"energy_start", energy_start},
-          {"energy_end", energy_end}, {"absolute_end", absolute_end},
-          {"overflowed_cells", overflowed_cells}, {"message", message},
-          {"line_search_restarts", line_search_restarts}, {"stalled", stalled},
-          {"stall_reason", stalled ? StallReason() : std::string()}, {"band", band}};
-}
-
-std::string PassSummary::StallReason() const {
-  if (stop == "line-search")
-    return "the line search failed at the first step" + (message.empty() ? std::string() : " (" + message + ")");
-  if (stop == "tolerance") return "the projected gradient was below the tolerance at the start";
-  if (stop == "non-finite") return "the energy or its gradient was not finite at the start";
-  if (stop == "max-iterations") return "the iteration cap was reached before the pass began";
-  return stop;
-}
-
-PassSummary PassSummary::FromJson(const json& j) {
-  PassSummary p;
-  p.level = j.at("level");
-  p.level_index = j.at("level_index");
-  p.pass_index = j.at("pass_index");
-  p.kind = j.at("pass").get<std::string>()[0];
-  p.stop = j.at("stop");
-  p.iterations = j.at("iterations");
-  p.evaluations = j.at("evaluations");
-  p.seconds = j.at("seconds");
-  p.energy_start = j.at("energy_start");
-  p.energy_end = j.at("energy_end");
-  p.absolute_end = j.at("absolute_end");
-  p.overflowed_cells = j.at("overflowed_cells");
-  p.message = j.value("message", "");
-  p.line_search_restarts = j.value("line_search_restarts", 0);
-  p.stalled = j.value("stalled", p.iterations == 0);
-  if (j.contains("band")) p.band = j.at("band");
-  return p;
-}
-
 json OptimizeSummary::ToJson(const OptimizeOptions& o) const {
   json passes = json::array();
   for (const PassSummary& p : this->passes) passes.push_back(p.ToJson());
+  json levels_json = json::array();
+  for (const Level& l : levels)
+    levels_json.push_back({{"scheduled", l.scheduled}, {"resolution", l.resolution}, {"fidelity", l.fidelity}});
   return {{"schedule", o.schedule.ToJson()}, {"evaluator", o.evaluator},
           {"precision", PrecisionName(o.precision)}, {"backend", o.backend},
           {"weights", WeightFieldName(o.weights)},
-          {"level_weights", o.level_weights == LevelWeights::kSampleFinest ? "sample" : "recompute"},
-          {"level_start", LevelStartName(o.level_start)},
+          {"level_weights", LevelWeightsName(o.level_weights)},
+          {"level_start", LevelStartName(o.level_start)}, {"min_level_fidelity", o.min_level_fidelity},
+          {"levels", levels_json},
           {"alpha", o.energy.alpha}, {"memory", o.memory}, {"complete", complete},
           {"seconds", seconds}, {"absolute_start", absolute_start}, {"absolute_end", absolute_end},
           {"best_pass", best_pass}, {"passes", passes}};
@@ -153,12 +83,21 @@ std::string OptimizeSummary::Report() const {
                     p.band.value("anchors", 0LL), p.band.value("energy_error", 0.0));
       s << line;
     }
+  for (const Level& l : levels)
+    if (l.resolution != l.scheduled) {
+      std::snprintf(line, sizeof line,
+                    "level %d ran at %d: at %d^3 the target is not represented (level fidelity below the "
+                    "minimum); at %d^3 its fidelity is %.3f\n",
+                    l.scheduled, l.resolution, l.scheduled, l.resolution, l.fidelity);
+      s << line;
+    }
   for (const PassSummary& p : passes)
     if (p.stalled)
       s << "stalled: level " << p.level << " pass " << p.kind << " (pass " << p.pass_index + 1
         << " of the level) made no iteration: " << p.StallReason() << "\n";
   std::snprintf(line, sizeof line, "total %.1f s; absolute energy %+.6f -> %+.6f (%s)%s\n", seconds,
-                absolute_start, absolute_end, BestPassName().c_str(), complete ? "" : " (interrupted)");
+                absolute_start, absolute_end, BestPassName().c_str(),
+                complete ? "" : (" (" + stop_reason + ")").c_str());
   s << line;
   return s.str();
 }
@@ -199,22 +138,6 @@ class SignalGuard {
  private:
   struct sigaction old_int_ {}, old_term_ {};
 };
-
-template <class Scalar>
-std::string Exact(const Scalar& x) {
-  std::ostringstream s;
-  s.precision(std::numeric_limits<Scalar>::max_digits10);
-  s << x;
-  return s.str();
-}
-
-template <class Scalar>
-Scalar ParseScalar(const std::string& s) {
-  if constexpr (std::is_same_v<Scalar, float128>) return float128(s);
-  else if constexpr (std::is_same_v<Scalar, long double>) return std::strtold(s.c_str(), nullptr);
-  else if constexpr (std::is_same_v<Scalar, float>) return std::strtof(s.c_str(), nullptr);
-  else return std::strtod(s.c_str(), nullptr);
-}
 
 // The energy over all R + 3 variables, whichever evaluator computes it.
 template <class Scalar>
@@ -283,207 +206,144 @@ class CachedObjective : public Objective<Scalar> {
   CachedEnergy<Scalar> e_;
 };
 
-struct Paths {
-  std::string dir, log, checkpoint, summary, map;
-};
-
 template <class Scalar>
 OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& o) {
   using Vector = Eigen::Matrix<Scalar, -1, 1>;
-  const auto t0 = std::chrono::steady_clock::now();
+  using Type = IterationSummary::Type;
   namespace fs = std::filesystem;
-  Paths paths{o.out_dir, o.out_dir + "/log.jsonl", o.out_dir + "/checkpoint.json", o.out_dir + "/summary.json",
-              o.out_dir + "/map.json"};
   std::error_code ec;
   fs::create_directories(o.out_dir, ec);
   if (ec) throw Error(o.out_dir + ": cannot create the output folder: " + ec.message());
 
   const std::string evaluator = ResolveEvaluator(o.evaluator, o.precision);
   const bool loglinear = evaluator == "band" || evaluator == "dense";
-  const std::string fingerprint = o.schedule.notation() + "|" + o.evaluator + "|" + PrecisionName(o.precision) +
-                                  "|" + WeightFieldName(o.weights) + "|" + std::to_string(map.top_count()) + "/" +
-                                  std::to_string(map.bottom_count());
-  // State: where we are and x.
-  OptimizeSummary summary;
-  int start_level = 0, start_pass = 0, start_iteration = 0;
-  long long step = 0;
-  double elapsed_before = 0;
-  Vector x = map.variables().cast<Scalar>();
-  Vector pass_start_x;
-  // The result: the lowest absolute energy seen at the start and at pass ends.
-  Vector best_x = x;
-  double best_absolute = 0;
-  // The pass in progress at a checkpoint: its start energy and evaluations so far, so that a
-  // resumed pass reports what the uninterrupted one does.
-  double pass_energy_start = 0;
-  int pass_evaluations = 0;
+  const Fingerprint fingerprint(o, sdf, map);
+  RunState<Scalar> st;
+  st.x = map.variables().cast<Scalar>();
+  st.best_x = st.x;
+  CheckpointPosition start;
   if (o.resume) {
-    const std::string text = ReadFile(paths.checkpoint);
-    const json c = ParseJson(text, paths.checkpoint);
-    JsonReader r(c, paths.checkpoint);
-    if (r.string("/format") != "quijibo-checkpoint") r.fail("/format", "not a quijibo checkpoint");
-    if (r.string("/fingerprint") != fingerprint)
-      r.fail("/fingerprint", "the checkpoint was made by a different run (" + r.string("/fingerprint") +
-                                 "; this run is " + fingerprint + ")");
-    start_level = int(r.integer("/level_index"));
-    start_pass = int(r.integer("/pass_index"));
-    start_iteration = int(r.integer("/iteration"));
-    step = r.integer("/step");
-    elapsed_before = r.number("/elapsed_seconds");
-    summary.absolute_start = r.number("/absolute_start");
-    pass_energy_start = c.value("pass_energy_start", 0.0);
-    pass_evaluations = c.value("pass_evaluations", 0);
-    auto read_vec = [&](const char* key) {
-      const json& a = c.at(key);
-      Vector v(Eigen::Index(a.size()));
-      for (std::size_t k = 0; k < a.size(); ++k) v[Eigen::Index(k)] = ParseScalar<Scalar>(a[k].get<std::string>());
-      return v;
-    };
-    x = read_vec("x");
-    pass_start_x = read_vec("pass_start_x");
-    if (x.size() != map.variable_count()) r.fail("/x", "does not match the map's variable count");
-    for (const json& p : c.at("passes")) summary.passes.push_back(PassSummary::FromJson(p));
-    // A checkpoint without the best map (an older version) counts only the start map, which is
-    // `map` on resume.
-    best_absolute = summary.absolute_start;
-    if (c.contains("best_x")) {
-      best_x = read_vec("best_x");
-      if (best_x.size() != x.size()) r.fail("/best_x", "does not match the map's variable count");
-      best_absolute = r.number("/best_absolute");
-      summary.best_pass = int(r.integer("/best_pass"));
+    start = ReadCheckpoint<Scalar>(o.out_dir + "/checkpoint.json", fingerprint, map.variable_count(), st);
+    if (start.complete) {
+      map.set_variables(st.best_x.template cast<double>());
+      st.summary.complete = true;
+      st.summary.seconds = st.elapsed_before;
+      st.summary.absolute_end = st.best_absolute;
+      return st.summary;
     }
-    if (c.value("complete", false)) {
-      map.set_variables(best_x.template cast<double>());
-      summary.complete = true;
-      summary.seconds = elapsed_before;
-      summary.absolute_end = best_absolute;
-      return summary;
-    }
-    // Drop log lines written after the checkpoint: the resumed run writes them again.
-    const long long log_bytes = r.integer("/log_bytes");
-    if (fs::exists(paths.log) && std::int64_t(fs::file_size(paths.log)) > log_bytes)
-      fs::resize_file(paths.log, std::uintmax_t(log_bytes));
-  } else {
-    WriteFileAtomically(paths.log, "");
   }
-  std::ofstream log(paths.log, std::ios::app);
-  if (!log) throw Error(paths.log + ": cannot write");
-  auto elapsed = [&] {
-    return elapsed_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  };
-  auto emit = [&](json line) {
-    line["seconds"] = elapsed();
-    errno = 0;
-    log << line.dump() << "\n";
-    log.flush();
-    if (!log) throw Error(paths.log + ": cannot write: " + (errno ? std::strerror(errno) : "disk full?"));
+
+  // The observers: the log first, so the others see a record only once it is logged; the
+  // caller's callbacks last.
+  JsonlLog log(o.out_dir + "/log.jsonl", o.resume ? start.log_bytes : -1);
+  ProgressLine progress(o.schedule);
+  CheckpointWriter<Scalar> checkpoints(o.out_dir + "/checkpoint.json", fingerprint, o, st, log);
+  std::vector<IterationCallback*> observers = {&log, &progress, &checkpoints};
+  observers.insert(observers.end(), o.callbacks.begin(), o.callbacks.end());
+  bool abort = false;
+  auto notify = [&](IterationSummary s) {
+    s.step = st.step;
+    s.seconds = st.Elapsed();
+    for (IterationCallback* observer : observers)
+      if ((*observer)(s) == CallbackReturnType::kAbort) abort = true;
   };
 
-  // The finest grid with the original weights: the absolute energy and the reweighting.
-  const std::vector<double> finest_w = ComputeWeights(sdf, o.weights);
-  EnergyGrid finest = MakeEnergyGrid(sdf, finest_w, o.weights, 0, LevelWeights::kSampleFinest, 0.0);
-  LogLinearEnergy absolute(map, finest, o.energy, o.loglinear);
-  auto absolute_energy = [&](const Vector& xs) {
-    absolute.SetWeights(finest.weight, finest.eta);
-    return absolute.Evaluate(xs.template cast<double>(), EnergyMode::kFull, false).energy;
-  };
+  PassWeights weights(sdf, o.weights, map, o.energy, o.loglinear());
+  // The resolution each level runs at (deterministic, so a resumed run finds the same).
+  st.summary.levels.clear();
+  for (const LevelSpec& level : o.schedule.levels) {
+    OptimizeSummary::Level l;
+    l.scheduled = level.resolution;
+    l.resolution = ResolvedLevelResolution(sdf, weights.finest_weight(), o.weights, level.resolution,
+                                           o.level_weights, o.min_level_fidelity, &l.fidelity);
+    st.summary.levels.push_back(l);
+  }
   if (!o.resume) {
-    summary.absolute_start = absolute_energy(x);
-    best_absolute = summary.absolute_start;
-    emit({{"type", "run"}, {"schedule", o.schedule.notation()}, {"evaluator", evaluator},
-          {"precision", PrecisionName(o.precision)}, {"backend", o.backend}, {"weights", WeightFieldName(o.weights)},
-          {"roots", {{"top", map.top_count()}, {"bottom", map.bottom_count()}}}, {"step", 0},
-          {"absolute_energy", summary.absolute_start}});
+    st.summary.absolute_start = weights.Absolute(st.x.template cast<double>());
+    st.best_absolute = st.summary.absolute_start;
+    IterationSummary s;
+    s.type = Type::kRun;
+    s.absolute = st.summary.absolute_start;
+    s.run = {{"schedule", o.schedule.notation()}, {"evaluator", evaluator}, {"precision", PrecisionName(o.precision)},
+             {"backend", o.backend}, {"weights", WeightFieldName(o.weights)},
+             {"roots", {{"top", map.top_count()}, {"bottom", map.bottom_count()}}}};
+    notify(s);
   }
-
-  auto write_checkpoint = [&](int level_index, int pass_index, int iteration, const Vector& xs,
-                              const Vector& pass_start, bool complete) {
-    log.flush();
-    json c;
-    c["format"] = "quijibo-checkpoint";
-    c["version"] = 2;
-    c["fingerprint"] = fingerprint;
-    c["complete"] = complete;
-    c["level_index"] = level_index;
-    c["pass_index"] = pass_index;
-    c["iteration"] = iteration;
-    c["step"] = step;
-    c["log_bytes"] = (long long)fs::file_size(paths.log);
-    c["elapsed_seconds"] = elapsed();
-    c["absolute_start"] = summary.absolute_start;
-    c["pass_energy_start"] = pass_energy_start;
-    c["pass_evaluations"] = pass_evaluations;
-    json xv = json::array(), pv = json::array();
-    for (Eigen::Index k = 0; k < xs.size(); ++k) xv.push_back(Exact(xs[k]));
-    for (Eigen::Index k = 0; k < pass_start.size(); ++k) pv.push_back(Exact(pass_start[k]));
-    c["x"] = xv;
-    c["pass_start_x"] = pv;
-    json bv = json::array();
-    for (Eigen::Index k = 0; k < best_x.size(); ++k) bv.push_back(Exact(best_x[k]));
-    c["best_x"] = bv;
-    c["best_absolute"] = best_absolute;
-    c["best_pass"] = summary.best_pass;
-    json passes = json::array();
-    for (const PassSummary& p : summary.passes) passes.push_back(p.ToJson());
-    c["passes"] = passes;
-    WriteFileAtomically(paths.checkpoint, c.dump() + "\n");
-  };
 
   SignalGuard signals;
-  bool interrupted = false;
-  for (int li = start_level; li < int(o.schedule.levels.size()) && !interrupted; ++li) {
-    const LevelSpec& level = o.schedule.levels[li];
-    const EnergyGrid grid = MakeEnergyGrid(sdf, finest_w, o.weights, level.resolution, o.level_weights, 0.0);
+  bool stopped = false;  // by a signal or a callback
+  // A callback's abort on a record other than an iteration takes effect before the next pass.
+  auto stop_before = [&](int li, int pj) {
+    if (abort) checkpoints.Write(li, pj, 0, st.x, st.x, false);
+    return stopped = abort;
+  };
+  for (int li = start.level_index; li < int(o.schedule.levels.size()) && !stopped; ++li) {
+    const int first_pass = li == start.level_index ? start.pass_index : 0;
+    if (stop_before(li, first_pass)) break;
+    LevelSpec level = o.schedule.levels[li];
+    const OptimizeSummary::Level& resolved = st.summary.levels[std::size_t(li)];
+    level.resolution = resolved.resolution;
+    if (resolved.resolution != resolved.scheduled && first_pass == 0 &&
+        !(li == start.level_index && start.iteration > 0)) {
+      IterationSummary s;
+      s.type = Type::kLevelRaised;
+      s.level = resolved.resolution;
+      s.level_index = li;
+      s.scheduled = resolved.scheduled;
+      s.fidelity = resolved.fidelity;
+      notify(s);
+    }
+    const EnergyGrid grid = weights.Level(level.resolution, o.level_weights);
     // At the finest level the log-linear evaluator shares the absolute one's matrix.
-    const bool share = loglinear && grid.frame == finest.frame;
+    const bool share = loglinear && grid.frame == weights.finest().frame;
     std::unique_ptr<LogLinearEnergy> level_energy;
     std::unique_ptr<Objective<Scalar>> objective;
     if constexpr (std::is_same_v<Scalar, double>) {
       if (loglinear) {
-        if (!share) level_energy = std::make_unique<LogLinearEnergy>(map, grid, o.energy, o.loglinear);
-        LogLinearEnergy* e = share ? &absolute : level_energy.get();
+        if (!share) level_energy = std::make_unique<LogLinearEnergy>(map, grid, o.energy, o.loglinear());
+        LogLinearEnergy* e = share ? &weights.absolute_evaluator() : level_energy.get();
         if (evaluator == "band") objective = std::make_unique<BandObjective>(e);
         else objective = std::make_unique<LogLinearObjective>(e);
       }
     }
     if (!objective) objective = std::make_unique<CachedObjective<Scalar>>(map, grid, o.energy);
 
-    const int first_pass = li == start_level ? start_pass : 0;
-    if (o.level_start == OptimizeOptions::LevelStart::kBest && li > 0 && first_pass == 0 &&
-        summary.best_pass + 1 != int(summary.passes.size())) {
-      x = best_x;
-      emit({{"type", "level_start"}, {"level", level.resolution}, {"level_index", li}, {"step", step},
-            {"from_pass", summary.best_pass}, {"absolute", best_absolute}});
-    }
     for (int pj = first_pass; pj < int(level.passes.size()); ++pj) {
+      if (stop_before(li, pj)) break;
+      if (pj == 0 && li > 0 && o.level_start == OptimizeOptions::LevelStart::kBest &&
+          st.summary.best_pass + 1 != int(st.summary.passes.size())) {
+        st.x = st.best_x;
+        IterationSummary s;
+        s.type = Type::kLevelStart;
+        s.level = level.resolution;
+        s.level_index = li;
+        s.from_pass = st.summary.best_pass;
+        s.absolute = st.best_absolute;
+        notify(s);
+      }
       const PassSpec& spec = level.passes[pj];
-      const bool resumed_mid_pass = li == start_level && pj == start_pass && start_iteration > 0;
-      const int first_iteration = resumed_mid_pass ? start_iteration : 0;
-      if (!resumed_mid_pass) pass_start_x = x;
+      const bool resumed_mid_pass = li == start.level_index && pj == start.pass_index && start.iteration > 0;
+      const int first_iteration = resumed_mid_pass ? start.iteration : 0;
+      if (!resumed_mid_pass) st.pass_start_x = st.x;
       const auto pass_t0 = std::chrono::steady_clock::now();
-      const json where = {{"level", level.resolution}, {"level_index", li}, {"pass", std::string(1, char(spec.kind))},
-                          {"pass_index", pj}};
+      IterationSummary where;
+      where.level = level.resolution;
+      where.level_index = li;
+      where.pass_index = pj;
+      where.kind = char(spec.kind);
       if (!resumed_mid_pass) {
-        json line = where;
-        line["type"] = "pass_start";
-        line["step"] = step;
-        emit(line);
+        IterationSummary s = where;
+        s.type = Type::kPassStart;
+        notify(s);
       }
-      // Weights of this pass: the level's, or for R the reweighted field of the pass's start map.
-      EnergyGrid rgrid;
-      if (spec.kind == PassKind::kReweighted) {
-        const std::vector<double> rw =
-            ReweightedWeights(sdf, finest_w, absolute.LogModulus(pass_start_x.template cast<double>()));
-        rgrid = MakeEnergyGrid(sdf, rw, o.weights, level.resolution, LevelWeights::kSampleFinest, 0.0);
-      }
-      const EnergyGrid& pass_grid = spec.kind == PassKind::kReweighted ? rgrid : grid;
-      objective->SetWeights(pass_grid.weight, pass_grid.eta);
+      weights.BeginPass(spec.kind, level.resolution, grid, st.pass_start_x.template cast<double>(),
+                        [&](const std::vector<double>& w, double eta) { objective->SetWeights(w, eta); }, share);
       objective->BeginPass();
       const bool variable = spec.kind == PassKind::kVariable;
       const EnergyMode mode = variable ? EnergyMode::kVariable : EnergyMode::kFull;
-      if (variable) objective->BeginVariablePass(x);
-      const int na = variable ? 3 : int(x.size());
-      Vector xa = x.head(na);
+      if (variable) objective->BeginVariablePass(st.x);
+      const int na = variable ? 3 : int(st.x.size());
+      Vector xa = st.x.head(na);
       Vector lb = Vector::Zero(na), ub = Vector::Constant(na, std::numeric_limits<Scalar>::infinity());
       lb[0] = -std::numeric_limits<Scalar>::infinity();
       PassSummary ps;
@@ -493,9 +353,12 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       ps.kind = char(spec.kind);
       bool first_eval = true;
       // A resumed pass evaluates its start point once more than the uninterrupted one did.
-      const int evaluation_offset = resumed_mid_pass ? pass_evaluations - 1 : 0;
-      if (resumed_mid_pass) ps.energy_start = pass_energy_start, first_eval = false;
-      Vector full = x;
+      const int evaluation_offset = resumed_mid_pass ? st.pass_evaluations - 1 : 0;
+      if (resumed_mid_pass) ps.energy_start = st.pass_energy_start, first_eval = false;
+      Vector full = st.x;
+      st.live = &full;
+      st.active = na;
+      // Evaluate.
       auto f = [&](const Vector& y, Vector& g) -> Scalar {
         full.head(na) = y;
         const Evaluation<Scalar> ev = objective->Evaluate(full, mode);
@@ -504,51 +367,34 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
         if (first_eval) ps.energy_start = ToDouble(ev.energy), first_eval = false;
         return ev.energy;
       };
-      Progress progress("level " + std::to_string(level.resolution) + " pass " + std::string(1, char(spec.kind)),
-                        spec.max_iterations, false);
-      auto iterate = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
-        ++step;
-        pass_energy_start = ps.energy_start;
-        pass_evaluations = evals + evaluation_offset;
-        json line = where;
-        line["type"] = "iteration";
-        line["step"] = step;
-        line["iteration"] = it;
-        line["evaluations"] = pass_evaluations;
-        line["energy"] = ToDouble(fx);
-        line["projected_gradient"] = ToDouble(pg);
-        emit(line);
-        progress.update(it, "psi " + std::to_string(ToDouble(fx)));
+      // Step (the minimizer), then notify.
+      auto on_iteration = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
+        ++st.step;
+        st.pass_energy_start = ps.energy_start;
+        st.pass_evaluations = evals + evaluation_offset;
+        IterationSummary s = where;
+        s.type = Type::kIteration;
+        s.iteration = it;
+        s.evaluations = st.pass_evaluations;
+        s.energy = ToDouble(fx);
+        s.projected_gradient_norm = ToDouble(pg);
+        notify(s);
         if (it % o.absolute_every == 0) {
-          Vector cur = x;
-          cur.head(na) = full.head(na);
-          json a = where;
-          a["type"] = "absolute";
-          a["step"] = step;
-          a["iteration"] = it;
-          a["energy"] = absolute_energy(cur);
-          emit(a);
-          // The shared evaluator now holds the original weights: give it this pass's back.
-          if (share) objective->SetWeights(pass_grid.weight, pass_grid.eta);
+          IterationSummary a = where;
+          a.type = Type::kAbsolute;
+          a.iteration = it;
+          a.energy = weights.Absolute(st.Current().template cast<double>());
+          notify(a);
         }
-        if (g_interrupted) {
-          Vector cur = x;
-          cur.head(na) = full.head(na);
-          write_checkpoint(li, pj, it, cur, pass_start_x, false);
-          return IterationAction::kStop;
+        IterationAction action = IterationAction::kContinue;
+        if (g_interrupted || abort) {
+          checkpoints.Write(li, pj, it, st.Current(), st.pass_start_x, false);
+          action = IterationAction::kStop;
+        } else if (it % o.checkpoint_every == 0) {
+          action = IterationAction::kRestartMemory;  // the checkpoint writer wrote this state
         }
-        if (it % o.checkpoint_every == 0) {
-          Vector cur = x;
-          cur.head(na) = full.head(na);
-          write_checkpoint(li, pj, it, cur, pass_start_x, false);
-          return IterationAction::kRestartMemory;
-        }
-        return IterationAction::kContinue;
-      };
-      auto callback = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
-        const IterationAction a = iterate(it, evals, fx, pg);
-        if (step == TestExitStep()) _exit(kTestExitCode);  // a crash after this step's log and checkpoint
-        return a;
+        if (st.step == TestExitStep()) _exit(kTestExitCode);  // a crash after this step's log and checkpoint
+        return action;
       };
       LbfgsbOptions<Scalar> lo;
       lo.memory = o.memory;
@@ -557,16 +403,17 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       LbfgsbResult<Scalar> res;
       if constexpr (std::is_same_v<Scalar, double>) {
         if (o.backend == "ceres")
-          res = MinimizeCeres(f, xa, lb, lo, callback, first_iteration);
+          res = MinimizeCeres(f, xa, lb, lo, on_iteration, first_iteration);
         else
-          res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, callback, first_iteration);
+          res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, on_iteration, first_iteration);
       } else {
-        res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, callback, first_iteration);
+        res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, on_iteration, first_iteration);
       }
-      progress.finish();
-      x.head(na) = xa;
+      st.live = nullptr;
+      weights.EndPass();
+      st.x.head(na) = xa;
       if (res.stop == StopReason::kInterrupted) {
-        interrupted = true;
+        stopped = true;
         break;
       }
       ps.stop = StopReasonName(res.stop);
@@ -575,43 +422,42 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       ps.iterations = res.iterations;
       ps.evaluations = res.evaluations + evaluation_offset;
       ps.energy_end = ToDouble(res.f);
-      // Before absolute_energy, which changes a shared evaluator's weights.
-      ps.band = objective->PassReport(x, mode, res.f);
+      // Before the absolute energy, which changes a shared evaluator's weights.
+      ps.band = objective->PassReport(st.x, mode, res.f);
       ps.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_t0).count();
-      ps.absolute_end = absolute_energy(x);
+      ps.absolute_end = weights.Absolute(st.x.template cast<double>());
       ps.stalled = ps.iterations == 0;
-      if (ps.absolute_end < best_absolute) {
-        best_absolute = ps.absolute_end;
-        best_x = x;
-        summary.best_pass = int(summary.passes.size());
+      if (ps.absolute_end < st.best_absolute) {
+        st.best_absolute = ps.absolute_end;
+        st.best_x = st.x;
+        st.summary.best_pass = int(st.summary.passes.size());
       }
-      summary.passes.push_back(ps);
-      json line = ps.ToJson();
-      line["type"] = "pass_end";
-      line["step"] = step;
-      emit(line);
-      const bool last = li + 1 == int(o.schedule.levels.size()) && pj + 1 == int(level.passes.size());
-      const bool next_level = pj + 1 == int(level.passes.size());
-      write_checkpoint(next_level ? li + 1 : li, next_level ? 0 : pj + 1, 0, x, x, last);
+      st.summary.passes.push_back(ps);
+      IterationSummary s = where;
+      s.type = Type::kPassEnd;
+      s.pass = ps;
+      notify(s);  // the checkpoint writer records the next pass as the place to continue
     }
-    if (!interrupted) {
+    if (!stopped) {
       RationalMap level_map = map;
-      level_map.set_variables(x.template cast<double>());
+      level_map.set_variables(st.x.template cast<double>());
       WriteMap(o.out_dir + "/map_level_" + std::to_string(level.resolution) + ".json", level_map);
     }
   }
-  map.set_variables(best_x.template cast<double>());
-  summary.complete = !interrupted;
-  summary.seconds = elapsed();
-  summary.absolute_end = best_absolute;
-  WriteFileAtomically(paths.summary, summary.ToJson(o).dump(1) + "\n");
-  return summary;
+  map.set_variables(st.best_x.template cast<double>());
+  st.summary.complete = !stopped;
+  if (stopped) st.summary.stop_reason = g_interrupted ? "interrupted" : "aborted by a callback";
+  st.summary.seconds = st.Elapsed();
+  st.summary.absolute_end = st.best_absolute;
+  WriteFileAtomically(o.out_dir + "/summary.json", st.summary.ToJson(o).dump(1) + "\n");
+  return st.summary;
 }
 
 }  // namespace
 
 OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options) {
-  if (auto why = options.validate(); !why.empty()) throw Error("optimize: " + why);
+  if (auto why = options.Validate(); !why.empty()) throw Error("optimize: " + why);
+  if (options.out_dir.empty()) throw Error("optimize: an output folder is required");
   if (auto why = map.validate(); !why.empty()) throw Error("optimize: map: " + why);
   return DispatchPrecision(options.precision, [&]<class Real>() { return Run<Real>(sdf, map, options); });
 }

@@ -6,7 +6,9 @@
 //                      "absolute" lines every `absolute_every` iterations and at pass ends (psi on
 //                      the finest grid with the original weights, always by the exact log-linear
 //                      evaluator so curves of all precisions compare), pass start/end lines
-//   checkpoint.json    every `checkpoint_every` iterations, at pass ends and on SIGINT/SIGTERM
+//   checkpoint.json    every `checkpoint_every` iterations, at pass ends, on SIGINT/SIGTERM and when
+//                      a callback aborts; with the fingerprint of the settings, the target and the
+//                      initial map that --resume must match (optim/checkpoint.h)
 //   map_level_<N>.json the map after each level;  map.json  the result (see below)
 //   summary.json       each pass's stop reason, iterations, evaluations, time and energies
 //
@@ -20,14 +22,18 @@
 // run would not have done: resuming it continues correctly but not bit for bit.
 #pragma once
 
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "optim/iteration_callback.h"
 #include "optim/schedule.h"
+#include "optim/setting_range.h"
 #include "quijibo/energy.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/real.h"
+#include "quijibo/target.h"
 
 namespace quijibo {
 
@@ -41,8 +47,20 @@ inline const std::vector<std::string> kEvaluatorNames = {"auto", "band", "dense"
 // The evaluator a run uses: "band", "dense" or "cached". Throws on an unknown name.
 std::string ResolveEvaluator(const std::string& name, Precision precision);
 
+class JsonReader;
+
+// Every optimizer setting, once: its default here, its range in the table below, its JSON key in
+// ToJson/FromJson (docs/experiments.md "optimizer"); `quijibo optimize` binds its options to these
+// fields and `quijibo run` reads the experiment's "optimizer" object with FromJson.
 struct OptimizeOptions {
-  Schedule schedule;
+  inline static const std::string kDefaultSchedule = "25(VFRF)50(VFRF)97(VF)";
+  // Passes the schedule's notation leaves open get these (kDefaultMaxIterations, kDefaultTolerance;
+  // a JSON schedule has its own "defaults"); ScheduleFromNotation applies them.
+  struct MaxIterations {
+    int V = kDefaultMaxIterations[0], F = kDefaultMaxIterations[1], R = kDefaultMaxIterations[2];
+  } max_iterations;
+  double tolerance = kDefaultTolerance;
+  Schedule schedule = Schedule::Parse(kDefaultSchedule);
   std::string evaluator = "auto";  // kEvaluatorNames
   Precision precision = Precision::kDouble;
   std::string backend = "lbfgspp";      // "lbfgspp" (L-BFGS-B) or "ceres" (L-BFGS on x = y^2)
@@ -50,39 +68,74 @@ struct OptimizeOptions {
   // (quijibo/target.h); kLayer is the reference code's, kInverse the paper's.
   WeightField weights = WeightField::kBalanced;
   LevelWeights level_weights = LevelWeights::kSampleFinest;
-  EnergyOptions energy;
-  LogLinearOptions loglinear;
+  EnergyOptions energy;  // alpha
   // Where a level after the first starts: kLast, the last pass's map (the paper and reference);
   // kBest, the map with the lowest absolute energy so far (a coarse level whose cells are wider
   // than a thin wall can raise the absolute energy). kLast stays the default: on the spiky star
   // kBest threw away coarse F/R progress the finer level needed (one-step IoU 0.76 vs 0.88).
   enum class LevelStart { kBest, kLast };
   LevelStart level_start = LevelStart::kLast;
+  // A level runs at the smallest resolution, from its scheduled one up to the finest, whose grid
+  // represents the target with LevelFidelity >= this (quijibo/target.h): a level whose cells are
+  // wider than the target's walls or fingers fits another shape, and its passes move the map
+  // away from the target (docs/fidelity.md §6). 0.8 is the quality asked of the result (one-step
+  // IoU >= 0.8): a level that cannot reach it itself cannot lead there. 0: the schedule as written
+  // (the paper, the reference code).
+  double min_level_fidelity = 0.8;
+  // The log-linear evaluator's log-distance storage and, for kAuto, the finest level's budget
+  // (kept in GB, the setting's unit, so that the JSON value reads back exactly).
+  LogLinearOptions::Storage storage = LogLinearOptions{}.storage;
+  double memory_budget_gb = LogLinearOptions{}.memory_budget_bytes / 1e9;
   int memory = 5;              // L-BFGS correction pairs (reference: 5)
   int absolute_every = 10;     // iterations between absolute-energy log lines
   int checkpoint_every = 25;   // iterations between checkpoints (and L-BFGS memory restarts)
+
+  // Not settings of the optimization (not in ToJson, not in the checkpoint's fingerprint):
   std::string out_dir;         // required
   bool resume = false;         // continue from out_dir/checkpoint.json
-  std::string validate() const;
+  // Called with every record of the run (IterationSummary), in order, after the optimizer's own
+  // observers; kAbort stops the run as an interrupt does. Not owned.
+  std::vector<IterationCallback*> callbacks;
+
+  // The ranges of the numeric settings (max_iterations: kMaxIterationsRange in schedule.h).
+  static constexpr SettingRange kAlphaRange{"alpha", 0, 1e6, false, true};
+  static constexpr SettingRange kMemoryRange{"memory", 1, 100, true};
+  static constexpr SettingRange kMemoryBudgetRange{"memory_budget_gb", 0, 1e6};
+  static constexpr SettingRange kCheckpointEveryRange{"checkpoint_every", 1, 1000000, true};
+  static constexpr SettingRange kAbsoluteEveryRange{"absolute_every", 1, 1000000, true};
+  static constexpr SettingRange kToleranceRange{"tolerance", 0, 1e6};
+  static constexpr SettingRange kMinLevelFidelityRange{"min_level_fidelity", 0, 1};
+  // The names each choice accepts, in the order messages list them.
+  inline static const std::vector<std::string> kBackendNames = {"lbfgspp", "ceres"};
+  inline static const std::vector<std::string> kPrecisionNames = {"float", "double", "long-double", "float128"};
+  inline static const std::vector<std::string> kWeightNames = {"layer", "inverse", "balanced"};
+  inline static const std::vector<std::string> kLevelWeightNames = {"sample", "recompute"};
+  inline static const std::vector<std::string> kLevelStartNames = {"best", "last"};
+  inline static const std::vector<std::string> kStorageNames = {"auto", "double", "float", "on-the-fly"};
+
+  // "" or the first problem, naming the setting and its range.
+  std::string Validate() const;
+  // The per-kind caps and tolerance as the notation's pass defaults (V, F, R).
+  std::vector<PassSpec> PassDefaults() const;
+  // `notation` ("25(VFRF)50(VF)") with PassDefaults(); throws quijibo::Error on bad notation.
+  Schedule ScheduleFromNotation(const std::string& notation) const;
+  LogLinearOptions loglinear() const;  // storage and the budget in bytes
+  // Every setting, resolved: the schedule in its JSON form, enums by name. out_dir, resume and
+  // callbacks are not settings and are left out.
+  nlohmann::json ToJson() const;
+  // The experiment's "optimizer" object at `pointer` of a document read by `reader`: missing keys
+  // take the defaults; errors are "<file>: <pointer>: <what>" (JsonReader::fail); a relative
+  // schedule file resolves against `base`; `extra_keys` are allowed and ignored (a run's "name").
+  // The schedule is a notation string (passes take max_iterations and tolerance), a JSON object
+  // (optim/schedule.h) or the path of a .json file holding one.
+  static OptimizeOptions FromJson(const JsonReader& reader, const std::string& pointer,
+                                  const std::filesystem::path& base, const std::vector<std::string>& extra_keys = {});
 };
 
-struct PassSummary {
-  int level = 0, level_index = 0, pass_index = 0;
-  char kind = 'F';
-  std::string stop;
-  int iterations = 0, evaluations = 0;
-  double seconds = 0, energy_start = 0, energy_end = 0, absolute_end = 0;
-  long long overflowed_cells = 0;  // largest count seen in one evaluation (cached evaluator)
-  std::string message;
-  int line_search_restarts = 0;  // line-search failures recovered by resetting the L-BFGS memory
-  bool stalled = false;          // no iteration: the pass could not (or did not need to) move
-  // Narrow band passes: cells evaluated, anchors and the energy error against the dense
-  // evaluator at the pass's end (null otherwise).
-  nlohmann::json band;
-  std::string StallReason() const;  // why a stalled pass did not move, in words
-  nlohmann::json ToJson() const;
-  static PassSummary FromJson(const nlohmann::json& j);
-};
+OptimizeOptions::LevelStart ParseLevelStart(const std::string& name);  // best|last
+std::string LevelStartName(OptimizeOptions::LevelStart s);
+std::string LevelWeightsName(LevelWeights w);                          // sample|recompute
+LevelWeights ParseLevelWeights(const std::string& name);
 
 struct OptimizeSummary {
   std::vector<PassSummary> passes;
@@ -90,7 +143,16 @@ struct OptimizeSummary {
   double absolute_start = 0;
   double absolute_end = 0;   // of the returned map: the best over the start and the pass ends
   int best_pass = -1;        // index into passes of the returned map; -1: the start
-  bool complete = false;     // false when interrupted
+  // Each level: its scheduled resolution, the one it ran at (min_level_fidelity) and the
+  // LevelFidelity of the latter.
+  struct Level {
+    int scheduled = 0, resolution = 0;
+    double fidelity = 1;
+  };
+  std::vector<Level> levels;
+  bool complete = false;     // false when interrupted or aborted
+  // Why an incomplete run stopped: "interrupted" (SIGINT/SIGTERM) or "aborted by a callback".
+  std::string stop_reason;
   nlohmann::json ToJson(const OptimizeOptions& options) const;
   std::string Report() const;  // a readable table
   std::string BestPassName() const;  // "the map after level 25 pass F (pass 2 of 10)" or the start
@@ -98,11 +160,9 @@ struct OptimizeSummary {
 
 // Runs the schedule from `map` (its exponents, ln C, tau, beta are the start; its roots stay) on
 // the target `sdf`; `map` holds the result (the best map, see above) on return. Throws
-// quijibo::Error on bad input. When a
-// SIGINT/SIGTERM arrives, writes a checkpoint and returns with complete = false.
-OptimizeOptions::LevelStart ParseLevelStart(const std::string& name);  // best|last
-std::string LevelStartName(OptimizeOptions::LevelStart s);
-
+// quijibo::Error on bad input, and with options.resume on a checkpoint written with other settings,
+// another target or another initial map. When a SIGINT/SIGTERM arrives or a callback aborts,
+// writes a checkpoint and returns with complete = false.
 OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options);
 
 }  // namespace quijibo

@@ -9,7 +9,6 @@
 namespace quijibo {
 
 namespace {
-int KindIndex(PassKind k) { return k == PassKind::kVariable ? 0 : k == PassKind::kFull ? 1 : 2; }
 bool ParseKind(char c, PassKind& k) {
   switch (c) {
     case 'V': k = PassKind::kVariable; return true;
@@ -20,14 +19,17 @@ bool ParseKind(char c, PassKind& k) {
 }
 }  // namespace
 
+int PassKindIndex(PassKind k) { return k == PassKind::kVariable ? 0 : k == PassKind::kFull ? 1 : 2; }
+
 PassSpec DefaultPass(PassKind kind) {
   PassSpec p;
   p.kind = kind;
+  p.max_iterations = kDefaultMaxIterations[PassKindIndex(kind)];
   return p;
 }
 
 std::string PassSpec::validate() const {
-  if (max_iterations < 1) return "max_iterations must be >= 1";
+  if (auto why = kMaxIterationsRange.Check(max_iterations); !why.empty()) return why;
   if (!(tolerance >= 0) || !std::isfinite(tolerance)) return "tolerance must be a finite number >= 0";
   return {};
 }
@@ -60,7 +62,7 @@ Schedule Schedule::Parse(const std::string& text, const PassSpec defaults[3]) {
       if (std::isspace(static_cast<unsigned char>(text[i]))) { ++i; continue; }
       if (!ParseKind(char(std::toupper(static_cast<unsigned char>(text[i]))), k))
         fail(std::string("unknown pass '") + text[i] + "' (passes are V, F and R)");
-      level.passes.push_back(defaults ? defaults[KindIndex(k)] : DefaultPass(k));
+      level.passes.push_back(defaults ? defaults[PassKindIndex(k)] : DefaultPass(k));
       level.passes.back().kind = k;
       ++i;
     }
@@ -82,7 +84,7 @@ Schedule Schedule::FromJson(const JsonReader& r, const std::string& ptr) {
     r.allow_keys(p, {"kind", "max_iterations", "tolerance"});
     if (r.has(p + "/max_iterations")) {
       const long long m = r.integer(p + "/max_iterations");
-      if (m < 1 || m > 10000000) r.fail(p + "/max_iterations", "expected an integer in [1, 10000000]");
+      if (!kMaxIterationsRange.contains(double(m))) r.fail(p + "/max_iterations", kMaxIterationsRange.Expected(double(m)));
       spec.max_iterations = int(m);
     }
     if (r.has(p + "/tolerance")) spec.tolerance = r.number_at_least(p + "/tolerance", 0.0);
@@ -95,10 +97,8 @@ Schedule Schedule::FromJson(const JsonReader& r, const std::string& ptr) {
     for (int k = 0; k < 3; ++k)
       if (r.has(ptr + "/defaults/" + names[k])) read_pass(ptr + "/defaults/" + names[k], defaults[k]);
   }
-  if (r.has(ptr + "/notation")) {
-    if (r.has(ptr + "/levels")) r.fail(ptr, "give either \"notation\" or \"levels\", not both");
-    return Parse(r.string(ptr + "/notation"), defaults);
-  }
+  // Notation alone; or levels, with the notation beside them (ToJson's form) only if it agrees.
+  if (r.has(ptr + "/notation") && !r.has(ptr + "/levels")) return Parse(r.string(ptr + "/notation"), defaults);
   Schedule s;
   const std::size_t nl = r.array_size(ptr + "/levels");
   if (nl == 0) r.fail(ptr + "/levels", "expected at least one level");
@@ -121,7 +121,7 @@ Schedule Schedule::FromJson(const JsonReader& r, const std::string& ptr) {
         const std::string kind = r.string(pp + "/kind");
         PassKind pk;
         if (kind.size() != 1 || !ParseKind(kind[0], pk)) r.fail(pp + "/kind", "expected \"V\", \"F\" or \"R\"");
-        PassSpec spec = defaults[KindIndex(pk)];
+        PassSpec spec = defaults[PassKindIndex(pk)];
         spec.kind = pk;
         read_pass(pp, spec);
         level.passes.push_back(spec);
@@ -130,6 +130,9 @@ Schedule Schedule::FromJson(const JsonReader& r, const std::string& ptr) {
     s.levels.push_back(level);
   }
   if (auto why = s.validate(); !why.empty()) r.fail(ptr, why);
+  if (r.has(ptr + "/notation") && r.string(ptr + "/notation") != s.notation())
+    r.fail(ptr + "/notation", "\"" + r.string(ptr + "/notation") + "\" does not match the levels (" + s.notation() +
+                                  "); give either \"notation\" or \"levels\"");
   return s;
 }
 

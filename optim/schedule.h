@@ -15,16 +15,27 @@
 #include <string>
 #include <vector>
 
+#include "optim/setting_range.h"
+
 namespace quijibo {
 
 class JsonReader;
 
 enum class PassKind : char { kVariable = 'V', kFull = 'F', kReweighted = 'R' };
+inline constexpr PassKind kPassKinds[3] = {PassKind::kVariable, PassKind::kFull, PassKind::kReweighted};
+int PassKindIndex(PassKind kind);  // V 0, F 1, R 2
+
+// What a pass gets when the schedule does not say (the one definition: the notation, the JSON
+// form, OptimizeOptions and `quijibo optimize` all start from these). F and R: the reference
+// code's cap; V moves three variables and converges in far fewer iterations.
+inline constexpr int kDefaultMaxIterations[3] = {200, 2000, 2000};  // V, F, R
+inline constexpr double kDefaultTolerance = 1e-5;
+inline constexpr SettingRange kMaxIterationsRange{"max_iterations", 1, 10000000, true};
 
 struct PassSpec {
   PassKind kind = PassKind::kFull;
-  int max_iterations = 2000;  // the reference code's cap
-  double tolerance = 1e-5;    // on the infinity norm of the projected gradient
+  int max_iterations = kDefaultMaxIterations[1];
+  double tolerance = kDefaultTolerance;  // on the infinity norm of the projected gradient
   std::string validate() const;
 };
 
@@ -46,7 +57,7 @@ struct Schedule {
   std::string validate() const;
 };
 
-// Defaults per pass kind, indexed V, F, R.
+// The default pass of a kind (kDefaultMaxIterations, kDefaultTolerance).
 PassSpec DefaultPass(PassKind kind);
 
 }  // namespace quijibo

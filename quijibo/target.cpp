@@ -1,6 +1,7 @@
 #include "quijibo/target.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <map>
@@ -223,6 +224,49 @@ EnergyGrid MakeEnergyGrid(const ScalarGrid& sdf, const std::vector<double>& fine
   for (double w : g.weight) g.eta += std::abs(w);
   if (!(g.eta > 0)) throw Error("the weight field vanishes on this level");
   return g;
+}
+
+double LevelFidelity(const EnergyGrid& finest, const EnergyGrid& level) {
+  const GridFrame& f = finest.frame;
+  const GridFrame& l = level.frame;
+  if (f == l) return 1.0;
+  // The level cell holding each finest cell centre, per axis (the frames share their box).
+  std::array<std::vector<int>, 3> cell;
+  for (int a = 0; a < 3; ++a) {
+    cell[a].resize(std::size_t(f.dims[a]));
+    for (int i = 0; i < f.dims[a]; ++i) {
+      const double x = f.min_corner[a] + f.spacing * (i + 0.5);
+      cell[a][std::size_t(i)] = std::clamp(int(std::floor((x - l.min_corner[a]) / l.spacing)), 0, l.dims[a] - 1);
+    }
+  }
+  long long both = 0, either = 0;
+  for (int k = 0; k < f.dims[2]; ++k)
+    for (int j = 0; j < f.dims[1]; ++j)
+      for (int i = 0; i < f.dims[0]; ++i) {
+        const bool in_f = finest.weight[std::size_t(f.index(i, j, k))] < 0;
+        const bool in_l = level.weight[std::size_t(l.index(cell[0][std::size_t(i)], cell[1][std::size_t(j)],
+                                                           cell[2][std::size_t(k)]))] < 0;
+        both += in_f && in_l;
+        either += in_f || in_l;
+      }
+  return either > 0 ? double(both) / double(either) : 1.0;
+}
+
+int ResolvedLevelResolution(const ScalarGrid& sdf, const std::vector<double>& finest_weight, WeightField field,
+                            int n, LevelWeights level_weights, double min_fidelity, double* fidelity) {
+  const int finest_n = *std::max_element(sdf.frame.dims.begin(), sdf.frame.dims.end());
+  double fid = 1.0;
+  int m = n;
+  if (n < finest_n) {
+    const EnergyGrid finest = MakeEnergyGrid(sdf, finest_weight, field, 0, level_weights, 0.0);
+    for (m = n; m < finest_n; ++m) {
+      fid = LevelFidelity(finest, MakeEnergyGrid(sdf, finest_weight, field, m, level_weights, 0.0));
+      if (min_fidelity <= 0 || fid >= min_fidelity) break;
+    }
+    if (m == finest_n) fid = 1.0;
+  }
+  if (fidelity) *fidelity = fid;
+  return m;
 }
 
 }  // namespace quijibo

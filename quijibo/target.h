@@ -65,4 +65,17 @@ EnergyGrid MakeEnergyGrid(const ScalarGrid& sdf, WeightField field, int n = 0,
 EnergyGrid MakeEnergyGrid(const ScalarGrid& sdf, const std::vector<double>& finest_weight,
                           WeightField field, int n, LevelWeights level_weights, double slice);
 
+// How well a level represents the target, in [0, 1]: the IoU between the finest grid's inside
+// (W < 0 on `finest`) and the level's inside as the finest cells see it (each finest cell takes
+// the sign of W on the `level` cell that contains its centre). 1 on the finest grid itself. A
+// level well below 1 fits another shape than the target (a wall or finger thinner than its cells
+// vanishes or breaks up there), so its passes move the map away from the target: docs/fidelity.md.
+double LevelFidelity(const EnergyGrid& finest, const EnergyGrid& level);
+
+// The resolution a level runs at: the smallest n' in [n, finest] whose LevelFidelity reaches
+// `min_fidelity` (the finest resolution when none below it does; n itself when n >= finest or
+// min_fidelity <= 0). `fidelity` receives the chosen level's fidelity when not null.
+int ResolvedLevelResolution(const ScalarGrid& sdf, const std::vector<double>& finest_weight, WeightField field,
+                            int n, LevelWeights level_weights, double min_fidelity, double* fidelity = nullptr);
+
 }  // namespace quijibo

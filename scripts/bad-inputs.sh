@@ -100,5 +100,9 @@ row "sdf: PLY header without end_header (hung assimp; found by fuzzing)" noend.p
 row "sdf: zero resolution" garbage.obj "" "$Q" sdf "$ROOT/data/bunny.obj" -o x.qgrid -r 0
 row "optimize: missing map" none.json "" "$Q" optimize -t torus -m none.json -o opt
 row "optimize: empty schedule" none.json "" "$Q" optimize -t torus -m none.json -s "" -o opt
+row "optimize: caps with a JSON schedule" caps.json '{"levels": [{"resolution": 8, "passes": "VF"}]}' "$Q" optimize -t torus -m none.json -s caps.json --max-f 50 -o opt
+"$Q" --quiet map random --top 4 --bottom 3 --seed 1 --center-on torus --target-resolution 16 -o start.json >/dev/null 2>&1
+QUIJIBO_TEST_EXIT_AFTER_STEP=4 "$Q" --quiet optimize -t torus --target-resolution 16 -m start.json -s '8(VF)' --checkpoint-every 2 -o killed >/dev/null 2>&1
+row "optimize: --resume with another cap" none.json "" "$Q" optimize -t torus --target-resolution 16 -s '8(VF)' --max-f 50 --checkpoint-every 2 -o killed --resume
 row "mesh: incomplete map" bad-map.json '{"format": "quijibo-map", "version": 1}' "$Q" mesh bad-map.json -o x.ply
 row "mesh: wrong extension" bad-map.json "" "$Q" mesh bad-map.json -o x.stl

@@ -11,6 +11,7 @@ PACKAGES=(
   gnuplot-nox
   libassimp-dev
   mpi-default-dev mpi-default-bin
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

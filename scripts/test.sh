@@ -5,7 +5,14 @@
 #                experiments at a small scale, thread-count determinism), which the release pass
 #                runs. The sanitizer tree is built without MPI (QUIJIBO_WITH_MPI=OFF), so CI also
 #                checks that build, and at -O1 -g1 (ASan's advice; line tables are enough for its
-#                stack traces), which halves the compile time of the heaviest files.
+#                stack traces), which halves the compile time of the heaviest files. The sanitizer
+#                pass also leaves out the tests that only repeat whole optimizer runs in child
+#                processes (kill and resume of both back ends, every precision through Optimize):
+#                the release pass runs them, and the code they drive is run under the sanitizers
+#                by the optimizer's own tests; they were the slowest tests there (docs/benchmarks.md §10).
+#                It leaves out the Python module (QUIJIBO_PYTHON=OFF): an ASan-instrumented extension
+#                only loads into an interpreter started with LD_PRELOAD=libasan; the release pass runs
+#                the Python tests.
 # Each phase's time goes to stderr ("test.sh: ... N s"), to see where CI time goes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,7 +28,9 @@ phase "release tests" ctest --test-dir build --output-on-failure -j "$(nproc)"
 if [[ "${1:-}" == "--sanitize" ]]; then
   export QUIJIBO_BUILD_DIR=build-asan
   phase "sanitizer build" ./scripts/build.sh -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQUIJIBO_SANITIZE=ON \
-    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DQUIJIBO_E2E_TESTS=OFF -DQUIJIBO_WITH_MPI=OFF
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DQUIJIBO_E2E_TESTS=OFF -DQUIJIBO_WITH_MPI=OFF \
+    -DQUIJIBO_PYTHON=OFF
   export ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1
-  phase "sanitizer tests" ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE e2e
+  phase "sanitizer tests" ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE e2e \
+    -E 'KillResume|PrecisionsThroughOptimize|RunTest\.KilledAndResumed'
 fi

@@ -262,5 +262,34 @@ TEST(WeightsTest, CoarseLevelsSampleOrRecompute) {
   EXPECT_THROW(MakeEnergyGrid(AnalyticTarget("sphere:radius=5", sdf.frame), WeightField::kLayer), Error);
 }
 
+// A level whose cells are wider than the target's parts fits another shape (issue 14: the
+// pretzel's plate at 25^3); LevelFidelity measures that and ResolvedLevelResolution raises the level.
+TEST(WeightsTest, LevelFidelitySaysWhetherALevelSeesTheTarget) {
+  const GridFrame frame = GridFrame::Cube(48, {0, 0, 0}, 3.2);
+  const ScalarGrid sphere = AnalyticTarget("sphere", frame);
+  const ScalarGrid tube = AnalyticTarget("torus:major=1,minor=0.08", frame);  // 2.4 cells across
+  const WeightField w = WeightField::kBalanced;
+  const LevelWeights lw = LevelWeights::kSampleFinest;
+  const std::vector<double> sphere_w = ComputeWeights(sphere, w), tube_w = ComputeWeights(tube, w);
+  const EnergyGrid sphere_finest = MakeEnergyGrid(sphere, sphere_w, w, 0, lw, 0.0);
+  const EnergyGrid tube_finest = MakeEnergyGrid(tube, tube_w, w, 0, lw, 0.0);
+  EXPECT_EQ(LevelFidelity(tube_finest, tube_finest), 1.0);
+  EXPECT_GT(LevelFidelity(sphere_finest, MakeEnergyGrid(sphere, sphere_w, w, 12, lw, 0.0)), 0.8);
+  EXPECT_LT(LevelFidelity(tube_finest, MakeEnergyGrid(tube, tube_w, w, 12, lw, 0.0)), 0.5);
+
+  double fid = 0;
+  EXPECT_EQ(ResolvedLevelResolution(sphere, sphere_w, w, 12, lw, 0.8, &fid), 12);
+  EXPECT_GT(fid, 0.8);
+  const int raised = ResolvedLevelResolution(tube, tube_w, w, 12, lw, 0.8, &fid);
+  EXPECT_GT(raised, 12);
+  EXPECT_LE(raised, 48);
+  EXPECT_GE(fid, 0.8);
+  if (raised < 48) {  // the smallest such level: the one below it does not reach the bar
+    EXPECT_LT(LevelFidelity(tube_finest, MakeEnergyGrid(tube, tube_w, w, raised - 1, lw, 0.0)), 0.8);
+  }
+  EXPECT_EQ(ResolvedLevelResolution(tube, tube_w, w, 12, lw, 0.0, &fid), 12);  // 0: the schedule as written
+  EXPECT_EQ(ResolvedLevelResolution(tube, tube_w, w, 64, lw, 0.8, &fid), 64);  // at or above the finest: kept
+}
+
 }  // namespace
 }  // namespace quijibo

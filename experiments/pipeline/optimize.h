@@ -16,7 +16,6 @@ namespace quijibo::pipeline {
 struct OptimizeStageOptions {
   std::string name = "optimized";  // the run's folder (unique among an experiment's optimizers)
   OptimizeOptions optimizer;       // every setting of the optimization (out_dir, resume: the stage's)
-  nlohmann::json resolved;         // the settings as the experiment resolved them
 
   // The experiment's optimizer object at `pointer`; `named`: "name" is required (an array entry).
   static OptimizeStageOptions FromJson(const JsonReader& r, const std::string& pointer,

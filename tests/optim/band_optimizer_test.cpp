@@ -73,7 +73,7 @@ TEST(BandOptimizerTest, EvaluatorNamesResolve) {
   o.out_dir = "x";
   o.evaluator = "band";
   o.precision = Precision::kLongDouble;
-  EXPECT_NE(o.validate().find("double only"), std::string::npos);
+  EXPECT_NE(o.Validate().find("double only"), std::string::npos);
 }
 
 }  // namespace

@@ -39,8 +39,9 @@ TEST(ExperimentSchema, AMinimalQuijiboExperimentResolvesToTheOptionsDefaults) {
   EXPECT_EQ(r["target"], target.ToJson());
   EXPECT_EQ(r["initial"], InitialGuessStageOptions().ToJson());  // log-kernel for a mesh target
   ASSERT_EQ(r["optimizer"].size(), 1u);
-  const json empty = json::object();
-  EXPECT_EQ(r["optimizer"][0], OptimizeStageOptions::FromJson(JsonReader(empty, "{}"), "", ".", false).ToJson());
+  json optimizer = OptimizeOptions().ToJson();
+  optimizer["name"] = "optimized";
+  EXPECT_EQ(r["optimizer"][0], optimizer);
   MeshStageOptions mesh;
   mesh.optimizer = "optimized";
   EXPECT_EQ(r["mesh"], mesh.ToJson());
@@ -145,6 +146,28 @@ void ExpectHelpShowsDefaults(const std::vector<std::string>& command, const O& o
     ++checked;
   }
   EXPECT_GT(checked, 0) << command[0];
+}
+
+// `quijibo optimize` binds to OptimizeOptions (optim/optimizer.h) with its own table of ranges.
+TEST(CommandLineSchema, OptimizeHelpShowsTheOptimizerDefaults) {
+  const auto r = testing::RunQuijiboArgs({"optimize", "--help"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json defaults = OptimizeOptions().ToJson();
+  const std::vector<std::pair<std::string, std::string>> flags = {
+      {"--alpha", "alpha"},           {"--memory", "memory"},
+      {"--absolute-every", "absolute_every"}, {"--checkpoint-every", "checkpoint_every"},
+      {"--memory-budget", "memory_budget_gb"}, {"--tolerance", "tolerance"},
+      {"--evaluator", "evaluator"},   {"--precision", "precision"},
+      {"--backend", "backend"},       {"--weights", "weights"},
+      {"--level-weights", "level_weights"}, {"--level-start", "level_start"},
+      {"--storage", "storage"}};
+  for (const auto& [flag, key] : flags) {
+    const std::string column = OptionLine(r.out, flag);
+    ASSERT_FALSE(column.empty()) << flag;
+    const std::string shown = column.substr(column.rfind('=') + 1);
+    if (defaults[key].is_string()) EXPECT_EQ(shown, defaults[key].get<std::string>()) << flag;
+    else EXPECT_DOUBLE_EQ(std::stod(shown), defaults[key].get<double>()) << flag;
+  }
 }
 
 TEST(CommandLineSchema, HelpShowsTheOptionsDefaults) {

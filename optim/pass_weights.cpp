@@ -1,0 +1,39 @@
+#include "optim/pass_weights.h"
+
+#include "optim/reweight.h"
+
+namespace quijibo {
+
+PassWeights::PassWeights(const ScalarGrid& sdf, WeightField field, const RationalMap& map,
+                         const EnergyOptions& energy, const LogLinearOptions& loglinear)
+    : sdf_(sdf),
+      field_(field),
+      finest_w_(ComputeWeights(sdf, field)),
+      finest_(MakeEnergyGrid(sdf, finest_w_, field, 0, LevelWeights::kSampleFinest, 0.0)),
+      absolute_(map, finest_, energy, loglinear) {}
+
+EnergyGrid PassWeights::Level(int resolution, LevelWeights level_weights) const {
+  return MakeEnergyGrid(sdf_, finest_w_, field_, resolution, level_weights, 0.0);
+}
+
+void PassWeights::BeginPass(PassKind kind, int resolution, const EnergyGrid& level, const Eigen::VectorXd& start,
+                            SetWeights set, bool shared) {
+  pass_ = &level;
+  if (kind == PassKind::kReweighted) {
+    const std::vector<double> rw = ReweightedWeights(sdf_, finest_w_, absolute_.LogModulus(start));
+    reweighted_ = MakeEnergyGrid(sdf_, rw, field_, resolution, LevelWeights::kSampleFinest, 0.0);
+    pass_ = &reweighted_;
+  }
+  set_ = std::move(set);
+  shared_ = shared;
+  set_(pass_->weight, pass_->eta);
+}
+
+double PassWeights::Absolute(const Eigen::VectorXd& x) {
+  absolute_.SetWeights(finest_.weight, finest_.eta);
+  const double psi = absolute_.Evaluate(x, EnergyMode::kFull, false).energy;
+  if (shared_ && pass_) set_(pass_->weight, pass_->eta);
+  return psi;
+}
+
+}  // namespace quijibo
