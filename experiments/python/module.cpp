@@ -394,7 +394,7 @@ MeshResult Mesh(const RationalMap& map, int resolution, int iterations, double e
                   {"box", {{"min", o.min_corner}, {"max", o.max_corner}}},
                   {"cells", s.cells},
                   {"spacing", s.spacing}};
-  summary.update(cli::MesherSummaryJson(s, o));
+  summary.update(pipeline::MesherSummaryJson(s, o));
   summary["evaluations"]["escaped"] = stats.escaped.load();
   return FromTriangleMesh(mesh, FromJson(summary));
 }
