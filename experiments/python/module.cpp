@@ -23,10 +23,18 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <thread>
 
 #include "experiments/cli.h"
+#include "experiments/pipeline/experiment.h"
+#include "experiments/pipeline/initial.h"
+#include "experiments/pipeline/mesh.h"
+#include "experiments/pipeline/modulus.h"
+#include "experiments/pipeline/portal.h"
+#include "experiments/pipeline/run.h"
+#include "experiments/pipeline/target.h"
 #include "mesh/julia_field.h"
 #include "mesh/marching_cubes.h"
 #include "mesh/triangle_mesh.h"
@@ -35,6 +43,7 @@
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
 #include "quijibo/grid.h"
+#include "quijibo/image.h"
 #include "quijibo/json_reader.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/rational_map.h"
@@ -339,64 +348,58 @@ TriangleMesh ToTriangleMesh(const Array& vertices, const py::array_t<std::int64_
   return mesh;
 }
 
-MeshResult Mesh(const RationalMap& map, int resolution, int iterations, double escape, double iso,
-                const std::string& frame, const std::string& precision_name, double slice,
-                const std::vector<double>& box, bool allow_empty) {
+// A stage's Options from keyword arguments, through its FromJson: the experiment's names, defaults,
+// ranges and messages ("<function>: <JSON pointer>: <what>"); relative paths resolve against the
+// working folder.
+template <class O>
+O OptionsFrom(const json& settings, const std::string& function, const O& start = O()) {
+  return O::FromJson(JsonReader(settings, function), "", std::filesystem::current_path(), start);
+}
+
+// Keys of `settings` that `function` does not take (the stage's run-only settings), as an error.
+void Refuse(const json& settings, const std::string& function, const std::vector<std::string>& keys,
+            const std::string& why) {
+  for (const std::string& k : keys)
+    if (settings.contains(k)) throw Error(function + ": /" + k + ": " + why);
+}
+
+MeshResult Mesh(const RationalMap& map, int resolution, int iterations, bool allow_empty, py::kwargs kwargs) {
   CheckMap(map, "mesh");
-  if (frame != "user" && frame != "fractal")
-    throw Error("mesh: unknown frame \"" + frame + "\": expected user or fractal");
-  MeshingOptions o;
-  o.resolution = resolution;
-  const double half = map.frame.fractal_radius / 2;
-  const Vec3 c = map.frame.box_center();
-  o.min_corner = {c[0] - half, c[1] - half, c[2] - half};
-  o.max_corner = {c[0] + half, c[1] + half, c[2] + half};
-  if (!box.empty()) {
-    if (box.size() != 6) throw Error("mesh: box: expected [xmin, ymin, zmin, xmax, ymax, zmax]");
-    for (int a = 0; a < 3; ++a) {
-      o.min_corner[std::size_t(a)] = box[std::size_t(a)];
-      o.max_corner[std::size_t(a)] = box[std::size_t(3 + a)];
-    }
-  }
-  if (auto why = o.validate(); !why.empty()) throw Error("mesh: " + why);
-  JuliaOptions j;
-  j.iterations = iterations;
-  j.escape_radius = escape;
-  j.slice = slice;
-  if (auto why = j.validate(); !why.empty()) throw Error(why);
-  const Precision precision = ParsePrecision(precision_name);
+  json settings = ToJson(kwargs, "mesh");
+  Refuse(settings, "mesh", {"enabled", "optimizer", "vdb", "obj", "vdb_grids", "vdb_band", "ply_double"},
+         "a setting of `quijibo run`'s mesh files; write the result with write_mesh");
+  settings["resolution"] = resolution;
+  settings["iterations"] = iterations;
+  const pipeline::MeshStageOptions options = OptionsFrom<pipeline::MeshStageOptions>(settings, "mesh");
   Interrupt interrupt;
-  TriangleMesh mesh;
-  MeshingSummary s;
-  JuliaFieldStats stats;
-  {
-    py::gil_scoped_release release;
-    BatchField field = MakeJuliaField(map, j, iso, precision, &stats);
-    // Once interrupted, the remaining batches are skipped (NaN: outside) and the mesh is dropped.
-    field.evaluate = [inner = field.evaluate, &interrupt](const Vec3* p, std::size_t n, double* v) {
+  // The local mesher on a field that, once interrupted, skips the remaining batches (NaN:
+  // outside); the mesh is then dropped.
+  const pipeline::Mesher mesher = [&interrupt](const BatchField& field, const MeshingOptions& o, MeshingSummary* s,
+                                               FieldBand* band, TriangleMesh* mesh, JuliaFieldStats* stats) {
+    BatchField polled = field;
+    polled.evaluate = [inner = field.evaluate, &interrupt](const Vec3* p, std::size_t n, double* v) {
       if (interrupt.Poll()) {
         std::fill(v, v + n, std::numeric_limits<double>::quiet_NaN());
         return;
       }
       inner(p, n, v);
     };
-    mesh = MeshField(field, o, &s);
-    if (!interrupt.raised() && frame == "user")
-      for (Vec3& v : mesh.vertices) v = map.frame.fractal_to_user(v);
+    return pipeline::LocalMesher(polled, o, s, band, mesh, stats);
+  };
+  pipeline::MeshStageResult r;
+  {
+    py::gil_scoped_release release;
+    r = pipeline::MeshJulia(map, options, mesher);
   }
   interrupt.Rethrow();
-  if (mesh.triangles.empty() && !allow_empty)
-    throw Error("mesh: the surface log|q_n| = " + std::to_string(iso) +
+  if (r.empty() && !allow_empty)
+    throw Error("mesh: the surface log|q_n| = " + std::to_string(options.iso) +
                 " does not cross the box (no triangles); allow_empty=True returns the empty mesh");
-  // The summary `quijibo mesh` prints, but for the file names.
-  json summary = {{"frame", frame},
-                  {"resolution", o.resolution},
-                  {"box", {{"min", o.min_corner}, {"max", o.max_corner}}},
-                  {"cells", s.cells},
-                  {"spacing", s.spacing}};
-  summary.update(pipeline::MesherSummaryJson(s, o));
-  summary["evaluations"]["escaped"] = stats.escaped.load();
-  return FromTriangleMesh(mesh, FromJson(summary));
+  // The summary `quijibo mesh` prints, without the file names.
+  json summary = pipeline::MeshSummary(r, options, "", pipeline::MeshFiles{});
+  summary.erase("map");
+  summary.erase("out");
+  return FromTriangleMesh(r.mesh, FromJson(summary));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -489,6 +492,162 @@ py::tuple OptimizeMap(const ScalarGrid& target, const RationalMap& initial, py::
   json report = summary.ToJson(options);
   if (!summary.complete) report["stop_reason"] = summary.stop_reason;
   return py::make_tuple(map, FromJson(report));
+}
+
+// ---------------------------------------------------------------------------------------------
+// target, initial guess
+
+py::array_t<std::uint8_t> ImageArray(const Image& image) {
+  py::array_t<std::uint8_t> a({py::ssize_t(image.height), py::ssize_t(image.width), py::ssize_t(3)});
+  auto w = a.mutable_unchecked<3>();
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const Rgb& c = image.pixels[std::size_t(y) * std::size_t(image.width) + std::size_t(x)];
+      w(y, x, 0) = c.r, w(y, x, 1) = c.g, w(y, x, 2) = c.b;
+    }
+  return a;
+}
+
+struct TargetHandle {
+  ScalarGrid grid;
+  FractalFrame frame;
+  std::string source;
+  py::object mesh = py::none();  // mesh targets: the mesh in the fractal frame
+  double sdf_seconds = 0;
+};
+
+TargetHandle FromTargetResult(const pipeline::TargetResult& t) {
+  TargetHandle h;
+  h.grid = t.grid;
+  h.frame = t.frame;
+  h.source = t.source;
+  if (!t.mesh.triangles.empty()) h.mesh = py::cast(FromTriangleMesh(t.mesh, py::dict()));
+  h.sdf_seconds = t.sdf_seconds;
+  return h;
+}
+
+TargetHandle MakeTarget(py::kwargs kwargs) {
+  const pipeline::TargetOptions options = OptionsFrom<pipeline::TargetOptions>(ToJson(kwargs, "target"), "target");
+  pipeline::TargetResult t;
+  {
+    py::gil_scoped_release release;
+    t = pipeline::Target(options);
+  }
+  return FromTargetResult(t);
+}
+
+struct InitialGuessHandle {
+  RationalMap map;
+  TargetHandle target;
+  py::object summary = py::none();
+  py::object picture = py::none();
+};
+
+InitialGuessHandle MakeInitialGuess(const std::string& mesh_path, py::kwargs kwargs) {
+  // The target's settings (resolution, padding, box, origin, ...) and the guess's, told apart by
+  // the target's schema.
+  const json all = ToJson(kwargs, "initial_guess");
+  json target = {{"mesh", mesh_path}}, initial = json::object();
+  std::set<std::string> target_keys;
+  for (const auto& s : pipeline::TargetOptions::Settings().settings()) target_keys.insert(s.key);
+  for (auto it = all.begin(); it != all.end(); ++it) {
+    if (it.key() == "mesh" || it.key() == "qgrid" || it.key() == "analytic")
+      throw Error("initial_guess: /" + it.key() + ": the target is the mesh given first");
+    (target_keys.count(it.key()) ? target : initial)[it.key()] = it.value();
+  }
+  const pipeline::TargetOptions target_options = OptionsFrom<pipeline::TargetOptions>(target, "initial_guess");
+  const pipeline::InitialGuessStageOptions options =
+      OptionsFrom<pipeline::InitialGuessStageOptions>(initial, "initial_guess");
+  pipeline::TargetResult t;
+  pipeline::InitialGuessResult g;
+  {
+    py::gil_scoped_release release;
+    t = pipeline::Target(target_options);
+    g = pipeline::InitialGuess(t, options);
+  }
+  InitialGuessHandle h;
+  h.map = std::move(g.map);
+  h.target = FromTargetResult(t);
+  h.summary = FromJson(g.summary);
+  if (g.picture) h.picture = ImageArray(*g.picture);
+  return h;
+}
+
+// ---------------------------------------------------------------------------------------------
+// shape modulus, portals
+
+struct ProductHandle {
+  std::string kind;  // "ply" or "png"
+  py::object mesh = py::none();
+  py::object image = py::none();
+  py::dict report;
+};
+
+ProductHandle FromProduct(const pipeline::Product& p, const json& report) {
+  ProductHandle h;
+  h.kind = p.kind;
+  if (p.kind == "ply") h.mesh = py::cast(FromTriangleMesh(p.mesh, FromJson(p.report)));
+  else h.image = ImageArray(p.image);
+  h.report = FromJson(report);
+  return h;
+}
+
+std::string OptionalPath(py::object out, const std::string& fallback) {
+  return out.is_none() ? fallback : ToJson(out, "out").get<std::string>();
+}
+
+ProductHandle ShapeModulus(const std::string& target, py::object out, py::kwargs kwargs) {
+  const pipeline::ModulusStageOptions options =
+      OptionsFrom<pipeline::ModulusStageOptions>(ToJson(kwargs, "modulus"), "modulus");
+  // Without `out`, the output format decides 2D or 3D as the file's extension would.
+  const std::string path = OptionalPath(out, "modulus." + options.output.format);
+  pipeline::ModulusStageResult r;
+  {
+    py::gil_scoped_release release;
+    r = pipeline::Modulus(target, options, path);
+    if (!out.is_none()) pipeline::WriteModulus(r, path, "");
+  }
+  return FromProduct(r.product, r.report);
+}
+
+ProductHandle Portal(py::object out, py::kwargs kwargs) {
+  const pipeline::PortalStageOptions options =
+      OptionsFrom<pipeline::PortalStageOptions>(ToJson(kwargs, "portal"), "portal");
+  const std::string path = OptionalPath(out, "portal." + options.output.format);
+  pipeline::PortalStageResult r;
+  {
+    py::gil_scoped_release release;
+    r = pipeline::Portal(options, path);
+    if (!out.is_none()) pipeline::WritePortal(r, path, "", "");
+  }
+  return FromProduct(r.product, r.report);
+}
+
+// ---------------------------------------------------------------------------------------------
+// run
+
+py::dict Run(py::object experiment, py::object out, bool resume, bool check, bool quiet) {
+  pipeline::Experiment e;
+  if (py::isinstance<py::dict>(experiment))
+    e = pipeline::Experiment::FromJson(ToJson(experiment, "experiment"), "experiment", std::filesystem::current_path());
+  else
+    e = pipeline::Experiment::FromFile(ToJson(experiment, "experiment").get<std::string>());
+  pipeline::RunOptions options;
+  options.out_dir = OptionalPath(out, "");
+  options.resume = resume;
+  options.check_only = check;
+  options.quiet = quiet;
+  pipeline::RunSummary s;
+  {
+    py::gil_scoped_release release;
+    s = pipeline::RunExperiment(e, options);
+  }
+  // A Ctrl-C during a stage that does not look for it takes effect now.
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  json stages = json::array();
+  for (const pipeline::StageRecord& r : s.stages)
+    stages.push_back({{"name", r.name}, {"status", r.status}, {"hash", r.hash}, {"seconds", r.seconds}});
+  return FromJson({{"results", s.results}, {"seconds", s.seconds}, {"stages", stages}, {"resolved", s.resolved}});
 }
 
 }  // namespace
@@ -739,11 +898,19 @@ PYBIND11_MODULE(quijibo, m) {
   m.def(
       "write_grid", [](const ScalarGrid& g, const std::string& path) { WriteGrid(path, g); }, py::arg("grid"),
       py::arg("path"), "Write a .qgrid file atomically.");
-  m.def(
-      "load_target", [](const std::string& spec, int resolution) { return cli::LoadTarget(spec, resolution); },
-      py::arg("spec"), py::arg("resolution"),
-      "A target as `quijibo energy --target` takes it: a .qgrid file, or an analytic shape sphere[:radius=R] / "
-      "torus[:major=R,minor=r] sampled on resolution^3 cells (`quijibo target`).");
+  py::class_<TargetHandle>(m, "Target",
+                           "The target stage's result: the signed distance Grid the energy fits, the frame and, for "
+                           "mesh targets, the mesh in the fractal frame.")
+      .def_readonly("grid", &TargetHandle::grid)
+      .def_readonly("frame", &TargetHandle::frame)
+      .def_readonly("source", &TargetHandle::source)
+      .def_readonly("mesh", &TargetHandle::mesh)
+      .def_readonly("sdf_seconds", &TargetHandle::sdf_seconds)
+      .def("__repr__", [](const TargetHandle& t) { return "Target(" + t.source + ")"; });
+  m.def("target", &MakeTarget,
+        "The target stage of an experiment (its `target` object's keys): exactly one of mesh= (.obj, .ply, .stl, "
+        ".off: normalized, origin placed, its signed distance on the target grid), qgrid= (a .qgrid) or analytic= "
+        "('sphere[:radius=R]', 'torus[:major=R,minor=r]'); resolution=, padding=, fractal_radius=, box=, origin=.");
 
   // ----- energy
   py::class_<EnergyResult>(m, "EnergyResult", "psi and its gradient (quijibo/energy.h)")
@@ -771,6 +938,30 @@ PYBIND11_MODULE(quijibo, m) {
         "energy`: evaluator dense (log-linear, exact, double; also: loglinear) or cached (the paper's, any "
         "precision), weights layer/inverse/balanced, resolution 0 = the target's own grid, mode full or variable "
         "(V pass).");
+
+  // ----- initial guess
+  py::class_<InitialGuessHandle>(m, "InitialGuess",
+                                 "The initial map and its target; unpacks as (map, target grid).")
+      .def_readonly("map", &InitialGuessHandle::map)
+      .def_property_readonly("target", [](const InitialGuessHandle& h) { return h.target.grid; })
+      .def_property_readonly("frame", [](const InitialGuessHandle& h) { return h.target.frame; })
+      .def_readonly("summary", &InitialGuessHandle::summary, "monopoles.json: the start check, the fit, seconds")
+      .def_readonly("picture", &InitialGuessHandle::picture,
+                    "start.png (log-kernel) or potential.png (monopoles) as an (H, W, 3) uint8 array")
+      .def("__len__", [](const InitialGuessHandle&) { return 2; })
+      .def("__iter__", [](const InitialGuessHandle& h) { return py::iter(py::make_tuple(h.map, h.target.grid)); })
+      .def("__getitem__", [](const InitialGuessHandle& h, int k) -> py::object {
+        if (k == 0 || k == -2) return py::cast(h.map);
+        if (k == 1 || k == -1) return py::cast(h.target.grid);
+        throw py::index_error("InitialGuess unpacks as (map, target)");
+      });
+  m.def("initial_guess", &MakeInitialGuess, py::arg("mesh"),
+        "The initial map for a mesh (`quijibo monopoles`, the experiment's initial stage): by default the "
+        "log-kernel fit (kind='log-kernel'; roots=, max_roots=, root_spacing=, root_offset=, band=, "
+        "band_amplitude=, ridge=, refine_rounds=, origin_root=, sampling_seed=) or the paper's monopoles "
+        "(kind='monopoles'; epsilon=, fit_target=, amplitude=, ...); the target grid's settings (resolution=, "
+        "padding=, fractal_radius=, box=, origin=) as the experiment's target. Returns an InitialGuess: "
+        "(map, target grid).");
 
   // ----- mesh
   py::class_<MeshResult>(m, "Mesh", "A triangle mesh: vertices (N, 3), faces (M, 3); unpacks as (vertices, faces)")
@@ -818,6 +1009,28 @@ PYBIND11_MODULE(quijibo, m) {
       py::arg("mesh"), py::arg("path"), py::kw_only(), py::arg("double") = false,
       "Write a Mesh (or a (vertices, faces) pair) as binary PLY (float, or double with double=True) or OBJ, "
       "atomically.");
+  // ----- shape modulus, portals, experiments
+  py::class_<ProductHandle>(m, "Product", "A shape modulus or portal result: a Mesh (3D) or an image (2D)")
+      .def_readonly("kind", &ProductHandle::kind, "'ply' (mesh) or 'png' (image)")
+      .def_readonly("mesh", &ProductHandle::mesh, "3D: the Mesh (unit frame)")
+      .def_readonly("image", &ProductHandle::image, "2D: (H, W, 3) uint8, row 0 at the top")
+      .def_readonly("report", &ProductHandle::report, "the command's JSON report");
+  m.def("modulus", &ShapeModulus, py::arg("target"), py::kw_only(), py::arg("out") = py::none(),
+        "The shape modulus (Schor and Kim 2023; `quijibo modulus`, the experiment's modulus stage) of `target` (a "
+        "mesh, a .qgrid or an analytic shape): settings as the experiment's modulus object (alpha=, beta=, "
+        "offset=, params=, versor={...}, output={'format': 'ply' or 'png', 'resolution': ..., ...}); with out= "
+        "(.ply or .png) also written.");
+  m.def("portal", &Portal, py::kw_only(), py::arg("out") = py::none(),
+        "Portals (Schor and Kim 2024; `quijibo portal`, the experiment's portal stage): spec= (a file or a dict) "
+        "or koch=True, alpha=, output={'format': 'png' or 'ply', ...}; with out= also written.");
+  m.def("run", &Run, py::arg("experiment"), py::kw_only(), py::arg("out") = py::none(),
+        py::arg("resume") = pipeline::RunOptions{}.resume, py::arg("check") = pipeline::RunOptions{}.check_only,
+        py::arg("quiet") = pipeline::RunOptions{}.quiet,
+        "Run an experiment (`quijibo run`): a JSON file's path or the document as a dict (paths relative to the "
+        "working folder), into out= (default: the experiment's outputs.folder, else results/<name>); resume=True "
+        "continues an interrupted optimization, check=True only resolves. Returns {'results', 'seconds', "
+        "'stages': [{'name', 'status', 'hash', 'seconds'}], 'resolved'}.");
+
   m.def("optimize", &OptimizeMap, py::arg("target"), py::arg("map"), py::arg("schedule") = py::none(),
         py::arg("callback") = py::none(), py::kw_only(), py::arg("out") = py::none(), py::arg("resume") = false,
         "Optimize `map`'s exponents, ln C, tau and beta on the signed distance Grid `target` (`quijibo optimize`; "
@@ -828,13 +1041,12 @@ PYBIND11_MODULE(quijibo, m) {
         "removed); resume=True continues the interrupted run there. Returns (map, summary): the best map and "
         "summary.json as a dict ('complete' False and 'stop_reason' when a callback stopped it). Ctrl-C writes a "
         "checkpoint and raises KeyboardInterrupt.");
-  m.def("mesh", &Mesh, py::arg("map"), py::arg("resolution") = MeshingOptions{}.resolution,
-        py::arg("iterations") = JuliaOptions{}.iterations, py::kw_only(),
-        py::arg("escape") = JuliaOptions{}.escape_radius, py::arg("iso") = 0.0, py::arg("frame") = "user",
-        py::arg("precision") = "double", py::arg("slice") = JuliaOptions{}.slice,
-        py::arg("box") = std::vector<double>{}, py::arg("allow_empty") = false,
-        "Mesh the Julia set {log|q_n| < iso} of `map` by marching cubes (`quijibo mesh`): resolution cells along "
-        "the box's longest side, n = iterations map applications; box [xmin, ymin, zmin, xmax, ymax, zmax] in the "
-        "fractal frame (default: the normalized unit cube); vertices in the user frame (the input mesh's) or "
-        "the fractal frame.");
+  m.def("mesh", &Mesh, py::arg("map"), py::arg("resolution") = pipeline::MeshStageOptions{}.meshing.resolution,
+        py::arg("iterations") = pipeline::MeshStageOptions{}.julia.iterations, py::kw_only(),
+        py::arg("allow_empty") = false,
+        "Mesh the Julia set {log|q_n| < iso} of `map` by marching cubes (`quijibo mesh`, the experiment's mesh "
+        "stage): resolution cells along the box's longest side, n = iterations map applications. Other settings "
+        "as keywords with the experiment's names: escape, iso, frame ('user': the input mesh's coordinates, or "
+        "'fractal'), precision, box [xmin, ymin, zmin, xmax, ymax, zmax] (fractal frame; default: the normalized "
+        "unit cube), ... An empty set raises quijibo.Error unless allow_empty=True.");
 }

@@ -55,15 +55,6 @@ def test_grid_round_trip(tmp_path):
     assert back.min_corner == [-1.0, -0.5, 0.0] and back.spacing == 0.25 and back.quantity == "signed-distance"
 
 
-def test_grid_matches_the_command_line_target(tmp_path):
-    path = tmp_path / "t.qgrid"
-    run_cli("target", "torus", "-r", 10, "-o", path)
-    from_file = quijibo.read_grid(str(path))
-    in_memory = quijibo.load_target("torus", 10)
-    assert np.array_equal(from_file.values, in_memory.values)
-    assert from_file.min_corner == in_memory.min_corner and from_file.spacing == in_memory.spacing
-
-
 def test_errors_carry_the_command_line_message(tmp_path):
     bad = tmp_path / "bad.json"
     bad.write_text('{"format": "quijibo-map", "version": 1, "ln_C": "x"}')
