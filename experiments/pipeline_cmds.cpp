@@ -49,6 +49,11 @@ void AddModuleCommands(CLI::App& app) {
          "center: the fractal origin at the bounding box's centre (default here); inside: at the point deepest "
          "inside the shape (mesh/normalize.h)")
       ->check(CLI::IsMember({"center", "inside"}));
+  sdf->add_option_function<std::string>(
+         "--frame-scale", [so](const std::string& v) { so->frame_scale = ParseFrameScale(v); },
+         "With --origin inside: trap (default) chooses fractal_radius so that the unit ball about the origin "
+         "just fits inside the shape; fixed keeps --fractal-radius (mesh/normalize.h)")
+      ->check(CLI::IsMember({"trap", "fixed"}));
   sdf->add_flag("--refuse-open", [so](std::int64_t) { so->sdf.allow_open = false; },
                 "Refuse meshes with holes instead of signing them by winding numbers");
   sdf->callback([so] { RunSdfCommand(*so); });
@@ -71,7 +76,7 @@ void AddModuleCommands(CLI::App& app) {
                 "(monopole/kernel_fit.h); monopoles: the paper's potential fit with its charges as exponents")
       ->capture_default_str()
       ->check(CLI::IsMember({"log-kernel", "monopoles"}));
-  BindSettings(m, a->target, {"resolution", "padding", "fractal_radius", "box", "origin"});
+  BindSettings(m, a->target, {"resolution", "padding", "fractal_radius", "box", "origin", "frame_scale"});
   BindSettings(m, a->guess);
   m->callback([a] {
     if (auto why = a->guess.Validate(); !why.empty()) throw Error("monopoles: " + why);

@@ -48,6 +48,23 @@ FractalFrame PlaceOriginInside(const TriangleMesh& user_mesh, FractalFrame frame
   return frame;
 }
 
+FrameScale ParseFrameScale(const std::string& name) {
+  if (name == "trap") return FrameScale::kTrap;
+  if (name == "fixed") return FrameScale::kFixed;
+  throw Error("unknown frame scale \"" + name + "\" (expected trap or fixed)");
+}
+
+std::string FrameScaleName(FrameScale s) { return s == FrameScale::kTrap ? "trap" : "fixed"; }
+
+FractalFrame ScaleToTrap(const TriangleMesh& user_mesh, FractalFrame frame, const std::string& name,
+                         double max_fractal_radius) {
+  const double depth = UnsignedDistance(ToFractalFrame(user_mesh, frame), {Vec3{0.0, 0.0, 0.0}})[0];
+  if (!(depth > 0.0) || !std::isfinite(depth))
+    throw Error(name + ": the fractal origin is on the surface: cannot scale the frame to it");
+  frame.fractal_radius = std::min(frame.fractal_radius / depth, max_fractal_radius);
+  return frame;
+}
+
 TriangleMesh ToFractalFrame(const TriangleMesh& mesh, const FractalFrame& frame) {
   TriangleMesh out = mesh;
   for (Vec3& p : out.vertices) p = frame.user_to_fractal(p);

@@ -32,6 +32,25 @@ std::string OriginPlacementName(OriginPlacement p);
 FractalFrame PlaceOriginInside(const TriangleMesh& user_mesh, FractalFrame frame, const std::string& name,
                                int resolution = 48);
 
+// How the fractal frame's scale is chosen (docs/fidelity.md §3).
+enum class FrameScale {
+  kFixed,  // w = fractal_radius (p - origin), fractal_radius as given (4: the reference code)
+  kTrap,   // the ball of radius 1 about the origin just fits inside the shape (ScaleToTrap)
+};
+FrameScale ParseFrameScale(const std::string& name);  // "trap" or "fixed"
+std::string FrameScaleName(FrameScale s);
+
+// `frame` with fractal_radius chosen so that the ball of radius 1 about the fractal origin touches
+// the surface of `user_mesh`: fractal_radius / depth, where depth is the distance from the origin to
+// the surface in `frame`'s fractal units, capped at `max_fractal_radius`. Why: a point of the one-step
+// set {|R(q)| < 1} lands in that ball; where the ball sticks out of the shape, its orbit leaves the
+// shape and the n-step set loses the point, and where the ball lies deeper than the surface, orbits
+// from just outside are caught. The one-step set does not depend on the scale (ln C absorbs it).
+// The origin must be inside (PlaceOriginInside). `name` names the mesh in errors. Throws
+// quijibo::Error when the origin is on or outside the surface.
+FractalFrame ScaleToTrap(const TriangleMesh& user_mesh, FractalFrame frame, const std::string& name,
+                         double max_fractal_radius = FractalFrame::kMaxFractalRadius);
+
 // Maps every vertex user -> fractal frame (ToFractalFrame) or back (FromFractalFrame).
 // Orientation is kept (the maps are a positive scale and a translation).
 TriangleMesh ToFractalFrame(const TriangleMesh& mesh, const FractalFrame& frame);

@@ -72,7 +72,11 @@ void RunSdfCommand(const SdfCommandOptions& options) {
   MeshReadReport report;
   const TriangleMesh user_mesh = ReadMesh(options.input, &report);
   FractalFrame frame = NormalizationFor(user_mesh, options.padding, options.fractal_radius);
-  if (options.origin == OriginPlacement::kInside) frame = PlaceOriginInside(user_mesh, frame, options.input);
+  if (options.origin == OriginPlacement::kInside) {
+    frame = PlaceOriginInside(user_mesh, frame, options.input);
+    if (options.frame_scale == FrameScale::kTrap)
+      frame = ScaleToTrap(user_mesh, frame, options.input);
+  }
   const TriangleMesh mesh = ToFractalFrame(user_mesh, frame);
   const GridFrame grid = TargetGridFrame(options.resolution, frame, options.box);
   SdfOptions sdf_options = options.sdf;

@@ -18,6 +18,7 @@ struct SdfCommandOptions {
   double fractal_radius = FractalFrame{}.fractal_radius;
   TargetBox box = TargetBox::kUnitCube;  // the grid's box (quijibo/frame.h)
   OriginPlacement origin = OriginPlacement::kCenter;  // the fractal origin (mesh/normalize.h)
+  FrameScale frame_scale = FrameScale::kTrap;  // with the origin inside (mesh/normalize.h)
   bool quiet = false;         // no summary on standard output
   SdfOptions sdf;             // sign policy (sdf.name is set to the input path)
 

@@ -22,6 +22,8 @@
 namespace quijibo {
 
 struct FractalFrame {
+  // The largest fractal_radius accepted or chosen: beyond it a shape is thinner than 1e-4 of its box.
+  static constexpr double kMaxFractalRadius = 1e4;
   double fractal_radius = 4.0;
   double padding = 0.125;
   // Normalization of the user's mesh into the unit cube (identity when no mesh is involved).

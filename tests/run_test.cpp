@@ -311,7 +311,8 @@ TEST(RunTest, KilledAndResumedRunMatchesAnUninterruptedOne) {
                   {"target", {{"analytic", "torus"}, {"resolution", 20}}},
                   {"initial", {{"kind", "random"}, {"top", 30}, {"bottom", 20}, {"root_radius", 1.5}}},
                   {"optimizer",
-                   {{"schedule", "10(VF)20(VRF)"}, {"max_iterations", {{"F", 50}, {"R", 25}}}, {"checkpoint_every", 7}}},
+                   {{"schedule", "10(VF)20(VRF)"}, {"max_iterations", {{"F", 50}, {"R", 25}}}, {"checkpoint_every", 7},
+                    {"min_level_fidelity", 0}}},
                   {"mesh", {{"enabled", false}}},
                   {"pictures", {{"enabled", false}}},
                   {"outputs", {{"plot", false}}}};

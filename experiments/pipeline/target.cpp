@@ -50,7 +50,7 @@ const Schema<TargetOptions>& TargetOptions::Settings() {
               [](auto& o) -> double& { return o.padding; }, 0.0, 0.4999)
           .Number(
               "fractal_radius", "--fractal-radius", "Fractal frame scale: w = fractal_radius (p - origin)",
-              [](auto& o) -> double& { return o.fractal_radius; }, 0.0, 1e4, true)
+              [](auto& o) -> double& { return o.fractal_radius; }, 0.0, FractalFrame::kMaxFractalRadius, true)
           .Enum(
               "box", "--target-box",
               "unit: the whole unit cube, a margin of `padding` around the shape; reference: the reference code's "
@@ -65,7 +65,15 @@ const Schema<TargetOptions>& TargetOptions::Settings() {
               {"inside", "center"},
               [](const TargetOptions& o) { return OriginPlacementName(o.origin.value_or(OriginPlacement::kCenter)); },
               [](TargetOptions& o, const std::string& v) { o.origin = ParseOriginPlacement(v); })
-          .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin.has_value(); });
+          .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin.has_value(); })
+          .Enum(
+              "frame_scale", "--frame-scale",
+              "trap: fractal_radius chosen so that the unit ball about the origin, where the map sends the "
+              "one-step set, just fits inside the shape (the n-step set keeps thin parts); fixed: fractal_radius "
+              "as given, as the reference code (mesh/normalize.h)",
+              {"trap", "fixed"}, [](const TargetOptions& o) { return FrameScaleName(o.frame_scale); },
+              [](TargetOptions& o, const std::string& v) { o.frame_scale = ParseFrameScale(v); })
+          .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin == OriginPlacement::kInside; });
   return s;
 }
 
@@ -116,7 +124,10 @@ TargetResult Target(const TargetOptions& o) {
   if (!o.mesh.empty()) {
     const TriangleMesh user = ReadMesh(o.mesh, &t.read_report);
     t.frame = NormalizationFor(user, o.padding, o.fractal_radius);
-    if (o.origin == OriginPlacement::kInside) t.frame = PlaceOriginInside(user, t.frame, o.mesh);
+    if (o.origin == OriginPlacement::kInside) {
+      t.frame = PlaceOriginInside(user, t.frame, o.mesh);
+      if (o.frame_scale == FrameScale::kTrap) t.frame = ScaleToTrap(user, t.frame, o.mesh);
+    }
     t.mesh = ToFractalFrame(user, t.frame);
     SdfOptions sdf;
     sdf.name = o.mesh;

@@ -28,6 +28,8 @@ struct TargetOptions {
   // Mesh targets of the QUIJIBO method: where the fractal origin goes; unset for the other
   // methods (their unit frame has no fractal origin).
   std::optional<OriginPlacement> origin = OriginPlacement::kInside;
+  // With the origin inside: trap chooses fractal_radius (ScaleToTrap), fixed keeps the one given.
+  FrameScale frame_scale = FrameScale::kTrap;
 
   std::string kind() const;      // "mesh", "qgrid" or "analytic" ("" when none is set)
   std::string Validate() const;  // empty when valid

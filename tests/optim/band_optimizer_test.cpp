@@ -34,6 +34,7 @@ TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
   for (int k = 0; k < 2; ++k) {
     OptimizeOptions o;
     o.schedule = Schedule::Parse("12(VFRF)24(VF)");
+    o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
     for (auto& l : o.schedule.levels)
       for (auto& p : l.passes) p.max_iterations = 30;
     o.evaluator = names[k];
@@ -70,6 +71,7 @@ TEST(BandOptimizerTest, EvaluatorNamesResolve) {
   EXPECT_THROW(ResolveEvaluator("fast", Precision::kDouble), Error);
   OptimizeOptions o;
   o.schedule = Schedule::Parse("8(V)");
+  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   o.out_dir = "x";
   o.evaluator = "band";
   o.precision = Precision::kLongDouble;

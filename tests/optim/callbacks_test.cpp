@@ -39,6 +39,7 @@ OptimizeOptions Small(const std::string& dir) {
   o.weights = WeightField::kLayer;
   o.max_iterations = {6, 12, 8};
   o.schedule = o.ScheduleFromNotation("10(VFR)20(VF)");
+  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   o.checkpoint_every = 4;
   o.absolute_every = 3;
   o.out_dir = dir;
@@ -137,6 +138,7 @@ class ResumeRefusal : public ::testing::Test {
     dir_ = Dir("refusal");
     OptimizeOptions o = Small(dir_);
     o.schedule = o.ScheduleFromNotation("10(VF)");
+    o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
     Callback stop([](const IterationSummary& s) {
       return s.type == IterationSummary::Type::kIteration && s.step == 5 ? CallbackReturnType::kAbort
                                                                           : CallbackReturnType::kContinue;
@@ -149,6 +151,7 @@ class ResumeRefusal : public ::testing::Test {
   OptimizeOptions Same() const {
     OptimizeOptions o = Small(dir_);
     o.schedule = o.ScheduleFromNotation("10(VF)");
+    o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
     o.resume = true;
     return o;
   }
@@ -173,6 +176,7 @@ TEST_F(ResumeRefusal, APassCap) {
   OptimizeOptions o = Same();
   o.max_iterations.V = 5;
   o.schedule = o.ScheduleFromNotation("10(VF)");
+  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   EXPECT_EQ(Refusal(o),
             "--resume: the checkpoint was written with optimizer.max_iterations.V = 6, this run has 5; rerun "
             "without --resume or with the same settings");
@@ -183,6 +187,7 @@ TEST_F(ResumeRefusal, APassCap) {
             std::string::npos);
   o = Same();
   o.schedule = o.ScheduleFromNotation("10(VFR)");
+  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   EXPECT_NE(Refusal(o).find("optimizer.schedule.notation = \"10(VF)\", this run has \"10(VFR)\""), std::string::npos);
   o = Same();
   o.schedule.levels[0].passes[0].tolerance = 1e-3;

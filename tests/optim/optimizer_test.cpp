@@ -191,6 +191,7 @@ TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {
   OptimizeOptions o;
   o.weights = WeightField::kLayer;
   o.schedule = Schedule::Parse("10(VFRF)20(VF)");
+  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   for (auto& l : o.schedule.levels)
     for (auto& p : l.passes) p.max_iterations = 40;
   o.out_dir = TempDir("schedule");
@@ -233,6 +234,7 @@ TEST(OptimizerTest, TheResultIsTheBestMapOverAllPasses) {
   OptimizeOptions o;
   o.weights = WeightField::kLayer;
   o.schedule = Schedule::Parse("20(VF)8(V)");
+  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   for (auto& l : o.schedule.levels)
     for (auto& p : l.passes) p.max_iterations = 40;
   o.out_dir = TempDir("best");
@@ -268,6 +270,7 @@ TEST(OptimizerTest, ALevelStartsFromTheBestMapSoFar) {
   OptimizeOptions o;
   o.weights = WeightField::kLayer;
   o.schedule = Schedule::Parse("20(VF)");
+  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   o.schedule.levels[0].passes[1].max_iterations = 2000;
   o.out_dir = TempDir("level_start_converge");
   const OptimizeSummary c = Optimize(converged.sdf, converged.map, o);
@@ -287,6 +290,7 @@ TEST(OptimizerTest, ALevelStartsFromTheBestMapSoFar) {
   for (int c : {4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15}) {
     RationalMap map = converged.map;
     o.schedule = coarse_schedule(c);
+    o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
     o.out_dir = TempDir("level_start_probe");
     const OptimizeSummary s = Optimize(converged.sdf, map, o);
     std::filesystem::remove_all(o.out_dir);
@@ -329,6 +333,7 @@ TEST(OptimizerTest, RunsEndToEndInLongDoubleWithTheCachedEvaluator) {
   SmallRun run;
   OptimizeOptions o;
   o.schedule = Schedule::Parse("8(VF)");
+  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   for (auto& p : o.schedule.levels[0].passes) p.max_iterations = 10;
   o.evaluator = "cached";
   o.precision = Precision::kLongDouble;

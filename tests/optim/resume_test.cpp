@@ -49,7 +49,8 @@ TEST_P(KillResume, ResumedRunsMatchAnUninterruptedOneByteForByte) {
                 .code,
             0);
   const std::string common = "optimize -t torus --target-resolution 24 -m " + map +
-                             " -s '12(VF)24(VRF)' --max-v 40 --max-f 60 --max-r 30 --checkpoint-every 7 --weights layer"
+                             " -s '12(VF)24(VRF)' --min-level-fidelity 0 --max-v 40 --max-f 60 --max-r 30 --checkpoint-every 7"
+                             " --weights layer"
                              " --backend " + backend;
   const auto whole = RunQuijibo(common + " -o " + dir + "/whole");
   ASSERT_EQ(whole.code, 0) << whole.out;

@@ -171,7 +171,8 @@ TEST(CommandLineSchema, OptimizeHelpShowsTheOptimizerDefaults) {
 }
 
 TEST(CommandLineSchema, HelpShowsTheOptionsDefaults) {
-  ExpectHelpShowsDefaults({"monopoles"}, TargetOptions(), {"resolution", "padding", "fractal_radius", "box", "origin"});
+  ExpectHelpShowsDefaults({"monopoles"}, TargetOptions(),
+                          {"resolution", "padding", "fractal_radius", "box", "origin", "frame_scale"});
   InitialGuessStageOptions kernel, monopoles;
   monopoles.kind = "monopoles";
   ExpectHelpShowsDefaults({"monopoles"}, kernel);
