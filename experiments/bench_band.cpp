@@ -75,11 +75,11 @@ json FPass(Eval&& eval, Eigen::VectorXd x, int iterations, Eigen::VectorXd* end 
     energy = ev.energy;
     return ev.energy;
   };
-  LbfgsbOptions<double> lo;
+  optim::LbfgsbOptions<double> lo;
   lo.max_iterations = iterations;
   lo.tolerance = 1e-12;
-  const auto res = MinimizeBounded<double>(f, x, lb, ub, lo, [](int, int, const double&, const double&) {
-    return IterationAction::kContinue;
+  const auto res = optim::MinimizeBounded<double>(f, x, lb, ub, lo, [](int, int, const double&, const double&) {
+    return optim::IterationAction::kContinue;
   });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (end) *end = x;

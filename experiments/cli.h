@@ -35,7 +35,7 @@ void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher);
 // The mesher's options (--dense, --speck-removal, --surface-following, the sparse search's settings),
 // one definition shared by `quijibo mesh`, `modulus` and `portal` (mesher_options.cpp); the
 // resolution and box are each command's own.
-void AddMesherOptions(CLI::App* command, MeshingOptions& options);
+void AddMesherOptions(CLI::App* command, mesh::MeshingOptions& options);
 
 // A target given on the command line: a .qgrid file, or an analytic shape ("sphere",
 // "torus:major=1,minor=0.3") sampled on the default target box (frame.h, TargetGridFrame)

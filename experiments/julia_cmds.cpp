@@ -149,8 +149,8 @@ void AddPicture(CLI::App& app) {
     JuliaArgs j;
     double modulus_scale = 0.0;
     // The view: the axis, its box (default `lo`..`hi`) and the pictures' size.
-    SliceView View(const Vec3& lo, const Vec3& hi) const {
-      SliceView v = pics.slice;
+    mesh::SliceView View(const Vec3& lo, const Vec3& hi) const {
+      mesh::SliceView v = pics.slice;
       const std::string l = [&] {
         std::string s = axis;
         for (char& ch : s) ch = char(std::tolower(static_cast<unsigned char>(ch)));
@@ -187,8 +187,8 @@ void AddPicture(CLI::App& app) {
     CheckPng(s->out);
     const RationalMap map = ReadMap(s->map);
     const ScalarGrid target = ReadGrid(s->target);
-    const SliceView base = pipeline::TargetSliceView(target, s->pics);
-    const SliceView view = s->View(base.min_corner, base.max_corner);
+    const mesh::SliceView base = pipeline::TargetSliceView(target, s->pics);
+    const mesh::SliceView view = s->View(base.min_corner, base.max_corner);
     s->j.o.julia.iterations = s->pics.slice_iterations;
     s->j.finish({(view.min_corner[0] + view.max_corner[0]) / 2, (view.min_corner[1] + view.max_corner[1]) / 2,
                  (view.min_corner[2] + view.max_corner[2]) / 2});
@@ -215,10 +215,10 @@ void AddPicture(CLI::App& app) {
     const RationalMap map = ReadMap(f->map);
     const double h = map.frame.fractal_radius / 2;
     const Vec3 c = map.frame.box_center();
-    const SliceView view = f->View({c[0] - h, c[1] - h, c[2] - h}, {c[0] + h, c[1] + h, c[2] + h});
+    const mesh::SliceView view = f->View({c[0] - h, c[1] - h, c[2] - h}, {c[0] + h, c[1] + h, c[2] + h});
     f->j.finish({(view.min_corner[0] + view.max_corner[0]) / 2, (view.min_corner[1] + view.max_corner[1]) / 2,
                  (view.min_corner[2] + view.max_corner[2]) / 2});
-    WritePng(f->out, ModulusVersorSlice(map, f->j.o.julia, view, f->modulus_scale, f->j.o.iso));
+    WritePng(f->out, mesh::ModulusVersorSlice(map, f->j.o.julia, view, f->modulus_scale, f->j.o.iso));
   });
 
   // render
@@ -233,7 +233,7 @@ void AddPicture(CLI::App& app) {
   BindSettings(rc, r->pics, {"render_size", "render_views"});
   rc->callback([r] {
     CheckPng(r->out);
-    WritePng(r->out, RenderMesh(ReadMesh(r->mesh), r->pics.render));
+    WritePng(r->out, mesh::RenderMesh(mesh::ReadMesh(r->mesh), r->pics.render));
   });
 }
 
@@ -269,7 +269,7 @@ void AddBenchMesh(CLI::App& app) {
           pipeline::MeshStageOptions o;
           o.meshing.resolution = r;
           o.julia.iterations = a->iterations;
-          const MeshingSummary s = pipeline::MeshJulia(map, o).summary;
+          const mesh::MeshingSummary s = pipeline::MeshJulia(map, o).summary;
           return json({{"seconds", s.seconds}, {"vertices", s.vertices}, {"triangles", s.triangles},
                        {"nodes", s.nodes_evaluated}, {"bisection", s.bisection_evaluations},
                        {"tiles_meshed", s.tiles_meshed}, {"tiles_total", s.tiles_total}})

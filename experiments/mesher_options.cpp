@@ -4,7 +4,7 @@
 
 namespace quijibo::cli {
 
-void AddMesherOptions(CLI::App* c, MeshingOptions& o) {
+void AddMesherOptions(CLI::App* c, mesh::MeshingOptions& o) {
   c->add_flag("--dense", [&o](std::int64_t) { o.sparse = false; }, "Evaluate every node (no sparse block search)");
   c->add_option("--tile", o.tile_cells, "Cells per tile side")->capture_default_str();
   c->add_option("--bisection-steps", o.bisection_steps, "Bisection steps per edge")->capture_default_str();

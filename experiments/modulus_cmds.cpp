@@ -123,7 +123,7 @@ void AddModulusCommands(CLI::App& app) {
     b->add_flag("--mesh", a->mesh, "Also run MeshField at the same resolution and report CPU per triangle");
     b->add_option("--json", a->out_json, "Write the results here");
     b->callback([a] {
-      LoadedTarget lt = LoadModulusTarget(a->target, a->sdf_resolution);
+      mesh::LoadedTarget lt = mesh::LoadModulusTarget(a->target, a->sdf_resolution);
       Versor v;
       v.polynomial = ReadVersorPolynomial(a->poly);
       ShapeModulusOptions so;
@@ -176,13 +176,13 @@ void AddModulusCommands(CLI::App& app) {
                   {"cpu_us_per_node", 1e6 * median(cpu) / nodes}, {"inside_nodes", inside},
                   {"iterations_histogram", iters}};
       if (a->mesh) {
-        MeshingOptions mo;
+        mesh::MeshingOptions mo;
         mo.min_corner = {-0.5, -0.5, -0.5};
         mo.max_corner = {0.5, 0.5, 0.5};
         mo.resolution = n;
-        MeshingSummary ms;
+        mesh::MeshingSummary ms;
         const double w0 = pipeline::WallSeconds(), c0 = pipeline::CpuSeconds();
-        const TriangleMesh m = MeshField(MakeQuaternionMapField(map, jo, 1.0), mo, &ms);
+        const mesh::TriangleMesh m = mesh::MeshField(mesh::MakeQuaternionMapField(map, jo, 1.0), mo, &ms);
         const double w = pipeline::WallSeconds() - w0, c = pipeline::CpuSeconds() - c0;
         rep["mesh"] = {{"triangles", m.triangles.size()}, {"wall_seconds", w}, {"cpu_seconds", c},
                        {"cpu_us_per_triangle", 1e6 * c / std::max<double>(1, m.triangles.size())},

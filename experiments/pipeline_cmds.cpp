@@ -30,7 +30,7 @@ using nlohmann::json;
 
 void AddModuleCommands(CLI::App& app) {
   // sdf
-  auto so = std::make_shared<SdfCommandOptions>();
+  auto so = std::make_shared<mesh::SdfCommandOptions>();
   CLI::App* sdf = app.add_subcommand(
       "sdf", "Signed distance field of a mesh (OBJ, PLY, STL, OFF) on the target grid, as .qgrid (and .vdb)");
   sdf->add_option("mesh", so->input, "Input mesh")->required();
@@ -45,18 +45,18 @@ void AddModuleCommands(CLI::App& app) {
          "code's box, the shape plus one cell")
       ->check(CLI::IsMember({"unit", "reference"}));
   sdf->add_option_function<std::string>(
-         "--origin", [so](const std::string& o) { so->origin = ParseOriginPlacement(o); },
+         "--origin", [so](const std::string& o) { so->origin = mesh::ParseOriginPlacement(o); },
          "center: the fractal origin at the bounding box's centre (default here); inside: at the point deepest "
          "inside the shape (mesh/normalize.h)")
       ->check(CLI::IsMember({"center", "inside"}));
   sdf->add_option_function<std::string>(
-         "--frame-scale", [so](const std::string& v) { so->frame_scale = ParseFrameScale(v); },
+         "--frame-scale", [so](const std::string& v) { so->frame_scale = mesh::ParseFrameScale(v); },
          "With --origin inside: trap (default) chooses fractal_radius so that the unit ball about the origin "
          "just fits inside the shape; fixed keeps --fractal-radius (mesh/normalize.h)")
       ->check(CLI::IsMember({"trap", "fixed"}));
   sdf->add_flag("--refuse-open", [so](std::int64_t) { so->sdf.allow_open = false; },
                 "Refuse meshes with holes instead of signing them by winding numbers");
-  sdf->callback([so] { RunSdfCommand(*so); });
+  sdf->callback([so] { mesh::RunSdfCommand(*so); });
 
   // monopoles: the target and initial-guess stages, bound to their Options.
   struct Args {
@@ -94,7 +94,8 @@ void AddModuleCommands(CLI::App& app) {
   struct BenchArgs {
     std::vector<std::string> meshes{"data/bunny.obj", "data/tooth.obj"};
     int resolution = 97, repeats = 3;
-    std::string fit_target = MonopoleOptions{}.target == MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
+    std::string fit_target =
+        monopole::MonopoleOptions{}.target == monopole::MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
     std::string out_md, out_json;
   };
   auto b = std::make_shared<BenchArgs>();
@@ -125,25 +126,26 @@ void AddModuleCommands(CLI::App& app) {
     json results = json::array();
     for (const std::string& path : b->meshes) {
       std::vector<std::vector<double>> t(std::size(names));
-      MonopoleResult last;
+      monopole::MonopoleResult last;
       std::int64_t triangles = 0;
       RationalMap map;
       for (int r = 0; r < b->repeats; ++r) {
         const auto t0 = Clock::now();
-        const TriangleMesh user = ReadMesh(path);
-        const FractalFrame frame = NormalizationFor(user);
-        const TriangleMesh mesh = ToFractalFrame(user, frame);
+        const mesh::TriangleMesh user = mesh::ReadMesh(path);
+        const FractalFrame frame = mesh::NormalizationFor(user);
+        const mesh::TriangleMesh mesh = mesh::ToFractalFrame(user, frame);
         t[0].push_back(since(t0));
         auto t1 = Clock::now();
-        const ScalarGrid sdf = SignedDistance(mesh, TargetGridFrame(b->resolution, frame));
+        const ScalarGrid sdf = mesh::SignedDistance(mesh, TargetGridFrame(b->resolution, frame));
         t[1].push_back(since(t1));
-        MonopoleOptions mo;
-        mo.target = b->fit_target == "reference" ? MonopoleTarget::kOneMinusPotential : MonopoleTarget::kPotential;
-        last = FitMonopoles(mesh.vertices, mesh.triangles, sdf, mo);
+        monopole::MonopoleOptions mo;
+        mo.target = b->fit_target == "reference" ? monopole::MonopoleTarget::kOneMinusPotential
+                                                 : monopole::MonopoleTarget::kPotential;
+        last = monopole::FitMonopoles(mesh.vertices, mesh.triangles, sdf, mo);
         t[2].push_back(last.seconds.bem), t[3].push_back(last.seconds.shell), t[4].push_back(last.seconds.potential);
         t[5].push_back(last.seconds.sampling), t[6].push_back(last.seconds.fit);
         t1 = Clock::now();
-        map = InitialMap(last.monopoles, frame, sdf, InitialGuessOptions{});
+        map = monopole::InitialMap(last.monopoles, frame, sdf, monopole::InitialGuessOptions{});
         t[7].push_back(since(t1));
         t[8].push_back(since(t0));
         triangles = std::int64_t(mesh.triangles.size());

@@ -28,10 +28,10 @@ namespace {
 
 struct FidelityArgs {
   std::string map, target, julia_mesh, shape_mesh, out;
-  FidelityOptions o;
+  mesh::FidelityOptions o;
 };
 
-void AddFidelityOptions(CLI::App* c, FidelityOptions& o) {
+void AddFidelityOptions(CLI::App* c, mesh::FidelityOptions& o) {
   c->add_option("--lattice", o.lattice, "Lattice nodes per axis")->capture_default_str()->check(CLI::Range(8, 512));
   c->add_option("--extend", o.extend, "Growth of the shape box on every side, as a fraction of its side")
       ->capture_default_str()->check(CLI::Range(0.0, 2.0));
@@ -41,14 +41,14 @@ void AddFidelityOptions(CLI::App* c, FidelityOptions& o) {
   c->add_option("--samples", o.surface_samples, "Points per mesh for Chamfer and Hausdorff")->capture_default_str();
 }
 
-Fidelity Measure(const FidelityArgs& a) {
+mesh::Fidelity Measure(const FidelityArgs& a) {
   const RationalMap map = ReadMap(a.map);
   const ScalarGrid target = ReadGrid(a.target);
-  Fidelity f = MeasureSets(map, target, a.o);
+  mesh::Fidelity f = mesh::MeasureSets(map, target, a.o);
   if (!a.julia_mesh.empty() || !a.shape_mesh.empty()) {
     if (a.julia_mesh.empty() || a.shape_mesh.empty())
       throw Error("fidelity: Chamfer and Hausdorff need both --julia and --shape");
-    MeasureSurfaceDistances(ReadMesh(a.julia_mesh), ReadMesh(a.shape_mesh), a.o, f);
+    mesh::MeasureSurfaceDistances(mesh::ReadMesh(a.julia_mesh), mesh::ReadMesh(a.shape_mesh), a.o, f);
   }
   return f;
 }
@@ -112,7 +112,7 @@ void AddShapeCommands(CLI::App& app) {
     std::vector<std::string> meshes, only;
     int resolution = 97, mesh_resolution = 128;
     bool initial_only = false, report_only = false;
-    FidelityOptions o;
+    mesh::FidelityOptions o;
   };
   auto b = std::make_shared<BenchArgs>();
   CLI::App* bench = app.get_subcommand("bench");
@@ -200,10 +200,10 @@ void AddShapeCommands(CLI::App& app) {
         try {
           if (code != 0) throw Error("quijibo monopoles failed: " + LastLine((dir / "initial.err").string()));
           const RationalMap initial = ReadMap((init / "map.json").string());
-          FidelityOptions one = b->o;
+          mesh::FidelityOptions one = b->o;
           one.julia.iterations = 0;
           row["roots"] = initial.root_count();
-          row["initial"] = MeasureSets(initial, ReadGrid((init / "target.qgrid").string()), one).ToJson();
+          row["initial"] = mesh::MeasureSets(initial, ReadGrid((init / "target.qgrid").string()), one).ToJson();
           row["start"] = ParseJson(ReadFile((init / "monopoles.json").string()), "monopoles.json")["start"];
         } catch (const Error& e) {
           row["error"] = e.what();
@@ -220,18 +220,18 @@ void AddShapeCommands(CLI::App& app) {
       json row = {{"name", sh.name}, {"mesh", sh.mesh}, {"why", sh.why}, {"seconds", seconds}, {"exit_code", code}};
       const fs::path run = dir / "run";
       try {
-        const TriangleMesh shape = ReadMesh(sh.mesh);
+        const mesh::TriangleMesh shape = mesh::ReadMesh(sh.mesh);
         row["triangles"] = shape.triangles.size();
         const ScalarGrid target = ReadGrid((run / "initial/target.qgrid").string());
-        FidelityOptions one = b->o;
+        mesh::FidelityOptions one = b->o;
         one.julia.iterations = 0;
         const RationalMap initial = ReadMap((run / "initial/map.json").string());
         row["roots"] = initial.root_count();
-        row["initial"] = MeasureSets(initial, target, one).ToJson();
+        row["initial"] = mesh::MeasureSets(initial, target, one).ToJson();
         if (fs::exists(run / "optimized/map.json")) {
           const RationalMap opt = ReadMap((run / "optimized/map.json").string());
-          Fidelity f = MeasureSets(opt, target, b->o);
-          if (fs::exists(run / "mesh/julia.ply")) MeasureSurfaceDistances(ReadMesh((run / "mesh/julia.ply").string()), shape, b->o, f);
+          mesh::Fidelity f = mesh::MeasureSets(opt, target, b->o);
+          if (fs::exists(run / "mesh/julia.ply")) mesh::MeasureSurfaceDistances(mesh::ReadMesh((run / "mesh/julia.ply").string()), shape, b->o, f);
           row["optimized"] = f.ToJson();
           const json summary = ParseJson(ReadFile((run / "optimized/summary.json").string()), "summary.json");
           row["psi_start"] = summary.value("absolute_start", 0.0);

@@ -8,7 +8,7 @@
 #include "quijibo/error.h"
 #include "quijibo/progress.h"
 
-namespace quijibo::mesher {
+namespace quijibo::mesh::mesher {
 
 namespace {
 
@@ -209,4 +209,4 @@ std::int64_t FollowSurface(const BatchField& field, const MeshingOptions& o, con
   return added;
 }
 
-}  // namespace quijibo::mesher
+}  // namespace quijibo::mesh::mesher

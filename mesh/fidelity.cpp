@@ -11,7 +11,7 @@
 #include "mesh/sdf.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 std::string FidelityOptions::validate() const {
   if (lattice < 8 || lattice > 512) return "lattice must be in [8, 512]";
@@ -172,4 +172,4 @@ double Mean(const std::vector<double>& v) {
   return v.empty() ? std::nan("") : s / double(v.size());
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -23,7 +23,7 @@
 #include "quijibo/julia.h"
 #include "quijibo/rational_map.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 struct FidelityOptions {
   int lattice = 72;             // nodes per axis, in [8, 512]
@@ -65,4 +65,4 @@ std::vector<double> NearestPointDistances(const std::vector<Vec3>& a, const std:
 // The mean of `v` (NaN when empty).
 double Mean(const std::vector<double>& v);
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -1,6 +1,6 @@
 #include "mesh/julia_field.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, double iso, Precision precision,
                           JuliaFieldStats* stats) {
@@ -40,4 +40,4 @@ BatchField MakeQuaternionMapField(std::shared_ptr<const QuaternionMap> map, cons
   return f;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -11,7 +11,7 @@
 #include "quijibo/quaternion_map.h"
 #include "quijibo/real.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 // BatchField::value_margin of log-modulus fields (this one, the shape modulus, portals): sub-cell
 // specks of the set sit next to outside nodes with log|q_m| up to ~0.2 (docs/meshing.md); few
@@ -35,4 +35,4 @@ BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, d
 BatchField MakeQuaternionMapField(std::shared_ptr<const QuaternionMap> map, const IterationOptions& options,
                                   double point_scale = 1.0);
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -5,7 +5,7 @@
 
 #include "mesh/mesher_internal.h"
 
-namespace quijibo::mesher {
+namespace quijibo::mesh::mesher {
 
 namespace {
 
@@ -117,4 +117,4 @@ LatticeMeshFacts AnalyzeLatticeMesh(const MeshLattice& l, const std::vector<std:
   return facts;
 }
 
-}  // namespace quijibo::mesher
+}  // namespace quijibo::mesh::mesher

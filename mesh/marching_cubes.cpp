@@ -31,7 +31,7 @@
 #include "quijibo/error.h"
 #include "quijibo/progress.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 using namespace mesher;
 
@@ -536,4 +536,4 @@ TriangleMesh MeshField(const BatchField& field, const MeshingOptions& o, Meshing
   return mesh;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

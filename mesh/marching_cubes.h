@@ -16,7 +16,7 @@
 #include "mesh/triangle_mesh.h"
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 // A scalar field evaluated in batches (one virtual call per batch, not per point).
 struct BatchField {
@@ -162,4 +162,4 @@ TilePiece MeshTilePiece(const BatchField& field, const TilePlan& plan, std::size
 TriangleMesh WeldTilePieces(const TilePlan& plan, std::vector<TilePiece>& pieces, MeshingSummary* summary,
                             FieldBand* band);
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

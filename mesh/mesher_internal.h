@@ -11,7 +11,7 @@
 
 #include "mesh/marching_cubes.h"
 
-namespace quijibo::mesher {
+namespace quijibo::mesh::mesher {
 
 inline bool Inside(double v, double iso) { return v < iso; }  // NaN and +inf: outside
 
@@ -84,4 +84,4 @@ struct LatticeMeshFacts {
 LatticeMeshFacts AnalyzeLatticeMesh(const MeshLattice& l, const std::vector<std::int64_t>& edges,
                                     const TriangleMesh& mesh);
 
-}  // namespace quijibo::mesher
+}  // namespace quijibo::mesh::mesher

@@ -11,7 +11,7 @@
 #include "quijibo/io.h"
 #include "quijibo/json_reader.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 using nlohmann::json;
 
@@ -105,4 +105,4 @@ void ReadModulusParams(const std::string& path, ShapeModulusOptions& so, int sdf
   if (auto why = so.validate(); !why.empty()) r.fail("", why);
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -13,7 +13,7 @@
 #include "quijibo/mask.h"
 #include "quijibo/modulus.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 // .obj, .ply, .stl or .off (any case).
 bool IsMeshFile(const std::string& path);
@@ -46,4 +46,4 @@ MaskGridLoader MakeMaskGridLoader(int sdf_resolution);
 // file and JSON pointer.
 void ReadModulusParams(const std::string& path, ShapeModulusOptions& so, int sdf_resolution);
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

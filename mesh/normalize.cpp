@@ -6,7 +6,7 @@
 #include "mesh/sdf.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 FractalFrame NormalizationFor(const TriangleMesh& mesh, double padding, double fractal_radius) {
   FractalFrame frame;
@@ -77,4 +77,4 @@ TriangleMesh FromFractalFrame(const TriangleMesh& mesh, const FractalFrame& fram
   return out;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

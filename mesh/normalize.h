@@ -6,7 +6,7 @@
 
 #include <string>
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 // The reference code's rule (TRIANGLE_MESH::normalize): the bounding box centre goes to
 // (0.5, 0.5, 0.5) and the longest side becomes 1 - 2 * padding, uniformly scaled; so with the
@@ -56,4 +56,4 @@ FractalFrame ScaleToTrap(const TriangleMesh& user_mesh, FractalFrame frame, cons
 TriangleMesh ToFractalFrame(const TriangleMesh& mesh, const FractalFrame& frame);
 TriangleMesh FromFractalFrame(const TriangleMesh& mesh, const FractalFrame& frame);
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -7,7 +7,7 @@
 #include "quijibo/error.h"
 #include "quijibo/mask.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 std::string SliceView::validate() const {
   if (axis < 0 || axis > 2) return "slice axis must be x, y or z";
@@ -213,4 +213,4 @@ Image InsideSlice(const std::function<double(const Vec3&)>& field, const ScalarG
   return img;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -14,7 +14,7 @@
 #include "quijibo/image.h"
 #include "quijibo/julia.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 // An axis-aligned plane through a box: the picture covers the box's two other axes (in increasing
 // order: x-y for axis z, x-z for axis y, y-z for axis x), the first one horizontal, the second
@@ -68,4 +68,4 @@ struct RenderOptions {
 Image RenderMesh(const TriangleMesh& mesh, int size, int views);
 inline Image RenderMesh(const TriangleMesh& mesh, const RenderOptions& o = {}) { return RenderMesh(mesh, o.size, o.views); }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

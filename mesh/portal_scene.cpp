@@ -11,7 +11,7 @@
 #include "quijibo/portal.h"
 #include "quijibo/rational_map.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 using nlohmann::json;
 
@@ -142,4 +142,4 @@ json KochSpec(double alpha, double beta, bool turbulent, double feather) {
   return spec;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

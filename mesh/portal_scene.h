@@ -11,7 +11,7 @@
 #include "quijibo/modulus.h"
 #include "quijibo/quaternion_map.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 struct PortalScene {
   std::shared_ptr<const QuaternionMap> map;
@@ -34,4 +34,4 @@ PortalScene SceneFromSpec(const nlohmann::json& doc, const std::string& source, 
 // `turbulent`, a noise versor (Fig. 8).
 nlohmann::json KochSpec(double alpha, double beta, bool turbulent, double feather);
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -9,7 +9,7 @@
 
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 namespace {
 
@@ -426,4 +426,4 @@ ScalarGrid SignedDistance(const TriangleMesh& mesh_in, const GridFrame& grid,
   return out;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

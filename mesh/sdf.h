@@ -39,7 +39,7 @@
 #include "mesh/vdb.h"
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 struct SdfOptions {
   // Far-field acceptance of the hierarchical winding number: larger is slower and more exact.
@@ -86,4 +86,4 @@ std::vector<double> UnsignedDistance(const TriangleMesh& mesh, const std::vector
 // point). For tests and for checking the hierarchical evaluation.
 std::vector<double> WindingNumbersExact(const TriangleMesh& mesh, const std::vector<Vec3>& points);
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

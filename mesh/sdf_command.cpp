@@ -9,7 +9,7 @@
 #include "quijibo/error.h"
 #include "quijibo/io.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 std::string SdfCommandOptions::validate() const {
   if (input.empty()) return "an input mesh is required";
@@ -124,4 +124,4 @@ void RunSdfCommand(const SdfCommandOptions& options) {
   }
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

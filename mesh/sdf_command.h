@@ -7,7 +7,7 @@
 #include "mesh/sdf.h"
 #include "quijibo/frame.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 struct SdfCommandOptions {
   std::string input;          // mesh file (.obj, .ply, .stl, .off)
@@ -44,4 +44,4 @@ void WriteFrameJson(const std::string& path, const FractalFrame& frame,
                     const std::string& source_mesh, int resolution);
 FractalFrame ReadFrameJson(const std::string& path);
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -26,7 +26,7 @@
 #include "quijibo/error.h"
 #include "quijibo/io.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 static_assert(std::endian::native == std::endian::little,
               "WritePly writes native little-endian bytes");
@@ -491,4 +491,4 @@ void FlipOrientation(TriangleMesh& mesh) {
   for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

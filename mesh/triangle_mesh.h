@@ -22,7 +22,7 @@
 
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 struct TriangleMesh {
   std::vector<Vec3> vertices;
@@ -83,4 +83,4 @@ MeshTopology AnalyzeTopology(const TriangleMesh& mesh);
 // Reverses every triangle's orientation.
 void FlipOrientation(TriangleMesh& mesh);
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

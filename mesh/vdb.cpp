@@ -14,7 +14,7 @@
 #include "quijibo/error.h"
 #include "quijibo/io.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 namespace {
 
@@ -224,4 +224,4 @@ ScalarGrid ReadVdb(const std::string& path, const std::string& name) {
   return out;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -13,7 +13,7 @@
 #include "mesh/triangle_mesh.h"
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 
 // Writes `grid` as a dense FloatGrid named `name` (every cell an active voxel, values rounded
 // to float). Quantity "signed-distance" is tagged as a level set (GRID_LEVEL_SET class, the
@@ -62,4 +62,4 @@ void WriteVdbVolumes(const std::string& path, const TriangleMesh& mesh, const Vd
 // voxels span. Needs a uniform linear transform. Throws quijibo::Error.
 ScalarGrid ReadVdb(const std::string& path, const std::string& name = "");
 
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -11,7 +11,7 @@
 #include "monopole/vec3_ops.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 using namespace monopole_detail;
 
@@ -407,4 +407,4 @@ ExteriorPotential SolveExteriorPotential(const std::vector<Vec3>& vertices,
   return pot;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

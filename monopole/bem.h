@@ -28,7 +28,7 @@
 
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 struct BemOptions {
   // Upper bound on the number of unknowns (patches) of the dense system. Memory is
@@ -123,4 +123,4 @@ ExteriorPotential SolveExteriorPotential(const std::vector<Vec3>& vertices,
 // Glisson, Schaubert, Al-Bundak, Butler 1984). Exact for x anywhere, including on the triangle.
 double TriangleInverseDistanceIntegral(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c);
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -5,7 +5,7 @@
 
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 std::string MonopoleOptions::validate() const {
   for (const std::string& why :
@@ -77,4 +77,4 @@ MonopoleResult FitMonopoles(const std::vector<Vec3>& vertices,
   return result;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -18,7 +18,7 @@
 #include "monopole/shell.h"
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 // What the monopoles fit on the shell.
 enum class MonopoleTarget {
@@ -85,4 +85,4 @@ MonopoleResult FitMonopoles(const std::vector<Vec3>& vertices,
                             const ScalarGrid& sdf, const MonopoleOptions& options = {},
                             const MonopoleProgressFn& progress = {});
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -7,7 +7,7 @@
 #include "quijibo/error.h"
 #include "quijibo/target.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 std::string InitialGuessOptions::validate() const {
   if (!(amplitude > 0) || !std::isfinite(amplitude)) return "amplitude must be a positive number";
@@ -98,4 +98,4 @@ RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFram
   return m;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

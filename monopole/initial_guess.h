@@ -17,7 +17,7 @@
 #include "monopole/monopole_fit.h"
 #include "quijibo/rational_map.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 struct InitialGuessOptions {
   // The "initial bulk scalar amplitude". The reference runs 3000 (its cfg comments: 50 "reliable",
@@ -45,4 +45,4 @@ RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFram
 // The reference's 1-D scan for ln C of `map` (its exponents, tau = beta = 1 as given).
 LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, double alpha);
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

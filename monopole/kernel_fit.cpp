@@ -11,7 +11,7 @@
 #include "monopole/sampling.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 std::string KernelFitOptions::validate() const {
   if (roots < 8 || roots > 4000) return "roots must be in [8, 4000]";
@@ -395,4 +395,4 @@ StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alph
   return check;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

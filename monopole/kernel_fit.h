@@ -34,7 +34,7 @@
 #include "quijibo/grid.h"
 #include "quijibo/rational_map.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 struct KernelFitOptions {
   // Root pairs are spaced at most `spacing` times their size (the shorter of their two offsets)
@@ -97,4 +97,4 @@ struct StartCheck {
 };
 StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alpha = 10.0);
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

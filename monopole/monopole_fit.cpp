@@ -8,7 +8,7 @@
 
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 namespace {
 
@@ -198,4 +198,4 @@ std::vector<Monopole> GreedyMonopoleFit(const std::vector<Vec3>& points,
   return out;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -20,7 +20,7 @@
 
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 struct Monopole {
   Vec3 position{0.0, 0.0, 0.0};
@@ -115,4 +115,4 @@ Eigen::VectorXd MonopoleColumn(const std::vector<Vec3>& points, const Vec3& m);
 // integers (Lemire's method), the same on every standard library.
 std::vector<int> SeededPermutation(int n, std::uint64_t seed);
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -9,7 +9,7 @@
 #include "monopole/vec3_ops.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 using namespace monopole_detail;
 
@@ -141,4 +141,4 @@ std::vector<Vec3> PoissonDiskSample(const std::vector<Vec3>& vertices,
   return out;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -16,7 +16,7 @@
 
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 struct SamplingOptions {
   // Points returned (exactly). The fit examines 100 per step: fitting P takes ~30 steps on the
@@ -42,4 +42,4 @@ std::vector<Vec3> PoissonDiskSample(const std::vector<Vec3>& vertices,
 // Uniform double in [0, 1) from the top 53 bits of one draw (portable across standard libraries).
 double UniformDouble(std::uint64_t bits);
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -4,7 +4,7 @@
 
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 std::string ShellOptions::validate() const {
   if (!std::isfinite(offset_cells) || offset_cells < 0.0)
@@ -39,4 +39,4 @@ OffsetShell ComputeOffsetShell(const ScalarGrid& sdf, const ShellOptions& option
   return shell;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -14,7 +14,7 @@
 
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 
 struct ShellOptions {
   double offset_cells = 5.0;  // reference code: 5 (its built-in default 3)
@@ -33,4 +33,4 @@ struct OffsetShell {
 // or an empty shell (offset beyond the grid).
 OffsetShell ComputeOffsetShell(const ScalarGrid& sdf, const ShellOptions& options = {});
 
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -5,7 +5,7 @@
 
 #include "quijibo/grid.h"
 
-namespace quijibo::monopole_detail {
+namespace quijibo::monopole::monopole_detail {
 
 inline Vec3 Sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 inline Vec3 Add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
@@ -17,4 +17,4 @@ inline Vec3 Cross(const Vec3& a, const Vec3& b) {
 inline double Norm(const Vec3& a) { return std::sqrt(Dot(a, a)); }
 inline double Distance(const Vec3& a, const Vec3& b) { return Norm(Sub(a, b)); }
 
-}  // namespace quijibo::monopole_detail
+}  // namespace quijibo::monopole::monopole_detail

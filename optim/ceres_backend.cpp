@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-namespace quijibo {
+namespace quijibo::optim {
 
 namespace {
 
@@ -143,4 +143,4 @@ LbfgsbResult<double> MinimizeCeres(const std::function<double(const Vec&, Vec&)>
   }
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

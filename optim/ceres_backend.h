@@ -15,7 +15,7 @@
 
 #include "optim/lbfgsb.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 LbfgsbResult<double> MinimizeCeres(
     const std::function<double(const Eigen::VectorXd&, Eigen::VectorXd&)>& f, Eigen::VectorXd& x,
@@ -23,4 +23,4 @@ LbfgsbResult<double> MinimizeCeres(
     const std::function<IterationAction(int, int, const double&, const double&)>& callback,
     int first_iteration = 0);
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

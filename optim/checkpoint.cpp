@@ -7,7 +7,7 @@
 #include "quijibo/io.h"
 #include "quijibo/json_reader.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 using nlohmann::json;
 
@@ -177,4 +177,4 @@ QUIJIBO_CHECKPOINT(long double)
 QUIJIBO_CHECKPOINT(float128)
 #undef QUIJIBO_CHECKPOINT
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

@@ -21,7 +21,7 @@
 #include "quijibo/grid.h"
 #include "quijibo/rational_map.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 struct Fingerprint {
   nlohmann::json options;  // OptimizeOptions::ToJson
@@ -107,6 +107,6 @@ class CheckpointWriter : public IterationCallback {
   JsonlLog& log_;
 };
 
-}  // namespace quijibo
+}  // namespace quijibo::optim
 
 // Instantiated for float, double, long double and float128 in checkpoint.cpp.

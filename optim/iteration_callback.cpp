@@ -1,6 +1,6 @@
 #include "optim/iteration_callback.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 using nlohmann::json;
 
@@ -90,4 +90,4 @@ json IterationSummary::ToJson() const {
   return j;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-namespace quijibo {
+namespace quijibo::optim {
 
 // What one pass reports at its end (summary.json's "passes", the log's "pass_end" lines).
 struct PassSummary {
@@ -74,4 +74,4 @@ class IterationCallback {
   virtual CallbackReturnType operator()(const IterationSummary& summary) = 0;
 };
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

@@ -8,7 +8,7 @@
 #include "quijibo/error.h"
 #include "quijibo/io.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 namespace fs = std::filesystem;
 
@@ -35,4 +35,4 @@ long long JsonlLog::bytes() {
   return (long long)fs::file_size(path_);
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

@@ -7,7 +7,7 @@
 
 #include "optim/iteration_callback.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 class JsonlLog : public IterationCallback {
  public:
@@ -22,4 +22,4 @@ class JsonlLog : public IterationCallback {
   std::ofstream out_;
 };
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

@@ -26,7 +26,7 @@ inline quijibo::float128 abs(const quijibo::float128& x) { return boost::multipr
 #include <stdexcept>
 #include <string>
 
-namespace quijibo {
+namespace quijibo::optim {
 
 enum class StopReason { kTolerance, kLineSearch, kMaxIterations, kInterrupted, kNonFinite };
 std::string StopReasonName(StopReason r);  // "tolerance", "line-search", ...
@@ -178,4 +178,4 @@ LbfgsbResult<Scalar> MinimizeBounded(
   }
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

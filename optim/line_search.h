@@ -22,7 +22,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace quijibo {
+namespace quijibo::optim {
 
 template <class Scalar>
 struct LineSearchOptions {
@@ -196,4 +196,4 @@ void MoreThuente(Function& f, Scalar& fx, Eigen::Matrix<Scalar, -1, 1>& x, Eigen
   }
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

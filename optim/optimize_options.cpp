@@ -7,7 +7,7 @@
 #include "quijibo/io.h"
 #include "quijibo/json_reader.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
@@ -206,4 +206,4 @@ OptimizeOptions OptimizeOptions::FromJson(const JsonReader& r, const std::string
   return o;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

@@ -22,7 +22,7 @@
 #include "quijibo/error.h"
 #include "quijibo/io.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 using nlohmann::json;
 
@@ -462,4 +462,4 @@ OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const Optimize
   return DispatchPrecision(options.precision, [&]<class Real>() { return Run<Real>(sdf, map, options); });
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

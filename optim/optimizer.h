@@ -30,12 +30,13 @@
 #include "optim/iteration_callback.h"
 #include "optim/schedule.h"
 #include "optim/setting_range.h"
+#include "quijibo/json_reader.h"
 #include "quijibo/energy.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/real.h"
 #include "quijibo/target.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 // The evaluator setting (one definition for the command line and the experiment files):
 //   "auto"    the narrow band in double (no evaluation touches more cells than a dense one, and
@@ -46,8 +47,6 @@ namespace quijibo {
 inline const std::vector<std::string> kEvaluatorNames = {"auto", "band", "dense", "loglinear", "cached"};
 // The evaluator a run uses: "band", "dense" or "cached". Throws on an unknown name.
 std::string ResolveEvaluator(const std::string& name, Precision precision);
-
-class JsonReader;
 
 // Every optimizer setting, once: its default here, its range in the table below, its JSON key in
 // ToJson/FromJson (docs/experiments.md "optimizer"); `quijibo optimize` binds its options to these
@@ -165,4 +164,4 @@ struct OptimizeSummary {
 // writes a checkpoint and returns with complete = false.
 OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options);
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

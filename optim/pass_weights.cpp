@@ -2,7 +2,7 @@
 
 #include "optim/reweight.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 PassWeights::PassWeights(const ScalarGrid& sdf, WeightField field, const RationalMap& map,
                          const EnergyOptions& energy, const LogLinearOptions& loglinear)
@@ -36,4 +36,4 @@ double PassWeights::Absolute(const Eigen::VectorXd& x) {
   return psi;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

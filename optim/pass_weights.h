@@ -15,7 +15,7 @@
 #include "quijibo/rational_map.h"
 #include "quijibo/target.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 class PassWeights {
  public:
@@ -53,4 +53,4 @@ class PassWeights {
   bool shared_ = false;
 };
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

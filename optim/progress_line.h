@@ -9,7 +9,7 @@
 #include "optim/schedule.h"
 #include "quijibo/progress.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 class ProgressLine : public IterationCallback {
  public:
@@ -34,4 +34,4 @@ class ProgressLine : public IterationCallback {
   std::unique_ptr<Progress> bar_;
 };
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

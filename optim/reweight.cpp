@@ -4,7 +4,7 @@
 
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 std::vector<double> ReweightedWeights(const ScalarGrid& sdf, const std::vector<double>& weight,
                                       const std::vector<double>& log_modulus, ReweightCounts* counts) {
@@ -39,4 +39,4 @@ std::vector<double> ReweightedWeights(const ScalarGrid& sdf, const std::vector<d
   return w;
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

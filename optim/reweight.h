@@ -13,7 +13,7 @@
 
 #include "quijibo/grid.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 struct ReweightCounts {
   long long outside = 0, poorly_captured = 0, well_captured = 0;
@@ -25,4 +25,4 @@ std::vector<double> ReweightedWeights(const ScalarGrid& sdf, const std::vector<d
                                       const std::vector<double>& log_modulus,
                                       ReweightCounts* counts = nullptr);
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

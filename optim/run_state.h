@@ -7,7 +7,7 @@
 
 #include "optim/optimizer.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 template <class Scalar>
 struct RunState {
@@ -39,4 +39,4 @@ struct RunState {
   }
 };
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

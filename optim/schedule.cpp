@@ -6,7 +6,7 @@
 #include "quijibo/error.h"
 #include "quijibo/json_reader.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 
 namespace {
 bool ParseKind(char c, PassKind& k) {
@@ -175,4 +175,4 @@ std::string Schedule::validate() const {
   return {};
 }
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

@@ -16,10 +16,9 @@
 #include <vector>
 
 #include "optim/setting_range.h"
+#include "quijibo/json_reader.h"
 
-namespace quijibo {
-
-class JsonReader;
+namespace quijibo::optim {
 
 enum class PassKind : char { kVariable = 'V', kFull = 'F', kReweighted = 'R' };
 inline constexpr PassKind kPassKinds[3] = {PassKind::kVariable, PassKind::kFull, PassKind::kReweighted};
@@ -60,4 +59,4 @@ struct Schedule {
 // The default pass of a kind (kDefaultMaxIterations, kDefaultTolerance).
 PassSpec DefaultPass(PassKind kind);
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

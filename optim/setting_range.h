@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-namespace quijibo {
+namespace quijibo::optim {
 
 struct SettingRange {
   const char* key;       // the setting's JSON key
@@ -36,4 +36,4 @@ struct SettingRange {
   }
 };
 
-}  // namespace quijibo
+}  // namespace quijibo::optim

@@ -25,7 +25,7 @@ namespace {
 
 double Now() { return MPI_Wtime(); }
 
-void PackPiece(Writer& w, std::int64_t index, const TilePiece& p) {
+void PackPiece(Writer& w, std::int64_t index, const mesh::TilePiece& p) {
   w.pod(index);
   w.pod(p.tile);
   w.vec(p.vertex_edges);
@@ -39,7 +39,7 @@ void PackPiece(Writer& w, std::int64_t index, const TilePiece& p) {
   w.pod(p.blocks_active);
 }
 
-std::int64_t UnpackPiece(Reader& r, TilePiece& p) {
+std::int64_t UnpackPiece(Reader& r, mesh::TilePiece& p) {
   const auto index = r.pod<std::int64_t>();
   p.tile = r.pod<std::int64_t>();
   r.vec(p.vertex_edges);
@@ -55,7 +55,7 @@ std::int64_t UnpackPiece(Reader& r, TilePiece& p) {
 }
 
 // The sparse search's lattice split evenly over the ranks (contiguous slices), gathered everywhere.
-PointsEvaluator SpreadSearch(const BatchField& field) {
+mesh::PointsEvaluator SpreadSearch(const mesh::BatchField& field) {
   return [&field](const std::vector<Vec3>& points, std::vector<double>& values) {
     const int P = Size(), r = Rank();
     const std::int64_t n = std::int64_t(points.size());
@@ -87,13 +87,15 @@ std::int64_t BatchSize(std::int64_t remaining, int threads, int ranks) {
   return std::min(remaining, want);
 }
 
-std::vector<std::pair<std::int64_t, TilePiece>> MeshBatch(const BatchField& field, const TilePlan& plan,
-                                                          const std::vector<std::int64_t>& batch, bool want_band) {
-  std::vector<std::pair<std::int64_t, TilePiece>> out(batch.size());
+std::vector<std::pair<std::int64_t, mesh::TilePiece>> MeshBatch(const mesh::BatchField& field,
+                                                                const mesh::TilePlan& plan,
+                                                                const std::vector<std::int64_t>& batch,
+                                                                bool want_band) {
+  std::vector<std::pair<std::int64_t, mesh::TilePiece>> out(batch.size());
 #pragma omp parallel for schedule(dynamic)
   for (std::int64_t i = 0; i < std::int64_t(batch.size()); ++i) {
     out[std::size_t(i)].first = batch[std::size_t(i)];
-    out[std::size_t(i)].second = MeshTilePiece(field, plan, std::size_t(batch[std::size_t(i)]), want_band);
+    out[std::size_t(i)].second = mesh::MeshTilePiece(field, plan, std::size_t(batch[std::size_t(i)]), want_band);
   }
   return out;
 }
@@ -105,17 +107,17 @@ struct CoordinatorReport {
 
 // Rank 0: the tiles through the work queue; its own batches run on a second thread (MPI stays on
 // this one).
-std::vector<TilePiece> MeshTiles(const BatchField& field, const TilePlan& plan, bool want_band, bool progress_on,
-                                 CoordinatorReport& report) {
+std::vector<mesh::TilePiece> MeshTiles(const mesh::BatchField& field, const mesh::TilePlan& plan, bool want_band,
+                                       bool progress_on, CoordinatorReport& report) {
   const int P = Size();
   const std::int64_t n = std::int64_t(plan.tile_ids.size());
-  std::vector<TilePiece> pieces(static_cast<std::size_t>(n));
+  std::vector<mesh::TilePiece> pieces(static_cast<std::size_t>(n));
   report.tiles_by_rank.assign(std::size_t(P), 0);
   std::int64_t next = 0, received = 0;
   const int own_threads = omp_get_max_threads();
-  std::future<std::vector<std::pair<std::int64_t, TilePiece>>> own;
+  std::future<std::vector<std::pair<std::int64_t, mesh::TilePiece>>> own;
   Progress progress("mesh: tiles", double(n), !progress_on);
-  auto store = [&](std::int64_t index, TilePiece&& piece, int rank) {
+  auto store = [&](std::int64_t index, mesh::TilePiece&& piece, int rank) {
     if (index < 0 || index >= n) throw Error("quijibo-mpi: a worker sent an unknown tile");
     pieces[std::size_t(index)] = std::move(piece);
     ++received;
@@ -135,7 +137,7 @@ std::vector<TilePiece> MeshTiles(const BatchField& field, const TilePlan& plan, 
     Reader r{bytes};
     const auto count = r.pod<std::int64_t>();
     for (std::int64_t i = 0; i < count; ++i) {
-      TilePiece piece;
+      mesh::TilePiece piece;
       const std::int64_t index = UnpackPiece(r, piece);
       store(index, std::move(piece), rank);
     }
@@ -162,14 +164,14 @@ std::vector<TilePiece> MeshTiles(const BatchField& field, const TilePlan& plan, 
 
 }  // namespace
 
-bool MpiMesher(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary, FieldBand* band,
-               TriangleMesh* mesh, JuliaFieldStats* stats) {
+bool MpiMesher(const mesh::BatchField& field, const mesh::MeshingOptions& options, mesh::MeshingSummary* summary,
+               mesh::FieldBand* band, mesh::TriangleMesh* mesh, mesh::JuliaFieldStats* stats) {
   const int P = Size(), rank = Rank();
   const double t0 = Now();
-  const TilePlan plan = PlanTiles(field, options, P > 1 ? SpreadSearch(field) : PointsEvaluator{});
+  const mesh::TilePlan plan = mesh::PlanTiles(field, options, P > 1 ? SpreadSearch(field) : mesh::PointsEvaluator{});
   const double t_plan = Now();
   const bool want_band = band != nullptr;
-  std::vector<TilePiece> pieces;
+  std::vector<mesh::TilePiece> pieces;
   CoordinatorReport report;
   if (rank == 0) {
     pieces = MeshTiles(field, plan, want_band, options.show_progress, report);
@@ -189,7 +191,7 @@ bool MpiMesher(const BatchField& field, const MeshingOptions& options, MeshingSu
   MPI_Reduce(local, total, 3, MPI_INT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
   if (rank != 0) return false;
   if (stats) stats->evaluations = total[0], stats->escaped = total[1], stats->non_finite = total[2];
-  *mesh = WeldTilePieces(plan, pieces, summary, band);
+  *mesh = mesh::WeldTilePieces(plan, pieces, summary, band);
   const double t_weld = Now();
   if (summary) summary->seconds = t_weld - t0;
   const json timing = {{"ranks", P},

@@ -9,8 +9,8 @@
 namespace quijibo::mpi {
 
 // A pipeline::Mesher over the ranks: the single-process mesh, bit for bit; false on workers.
-bool MpiMesher(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary, FieldBand* band,
-               TriangleMesh* mesh, JuliaFieldStats* stats);
+bool MpiMesher(const mesh::BatchField& field, const mesh::MeshingOptions& options, mesh::MeshingSummary* summary,
+               mesh::FieldBand* band, mesh::TriangleMesh* mesh, mesh::JuliaFieldStats* stats);
 
 // `quijibo-mpi sweep SWEEP.json`.
 void AddSweep(CLI::App& app);

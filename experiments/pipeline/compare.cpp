@@ -87,12 +87,13 @@ CompareResult Compare(const CompareOptions& o) {
   // Shape modulus "fit": load the target into the unit frame and get a versor.
   double t0 = WallSeconds();
   FractalFrame f;
-  if (std::filesystem::exists(FrameJsonPathFor(o.target))) f = ReadFrameJson(FrameJsonPathFor(o.target));
+  if (std::filesystem::exists(mesh::FrameJsonPathFor(o.target)))
+    f = mesh::ReadFrameJson(mesh::FrameJsonPathFor(o.target));
   double k = 1;
   ModulusTarget target = ModulusTargetFromGrid(grid, f.fractal_radius, f.padding, &k);
   const Versor v = o.modulus.versor.Make(target);
   ShapeModulusOptions so = o.modulus.shape;
-  if (o.modulus.params) ReadModulusParams(*o.modulus.params, so, o.modulus.sdf_resolution);
+  if (o.modulus.params) mesh::ReadModulusParams(*o.modulus.params, so, o.modulus.sdf_resolution);
   auto sm = std::make_shared<ShapeModulusMap>(target, v, so);
   const double sm_fit = WallSeconds() - t0;
   auto qj = std::make_shared<RationalQuaternionMap>(rmap);
@@ -122,42 +123,44 @@ CompareResult Compare(const CompareOptions& o) {
     return either ? double(both) / double(either) : 0.0;
   };
   // Meshes over the grid's box, in the fractal frame.
-  MeshingOptions mo;
+  mesh::MeshingOptions mo;
   mo.min_corner = grid->frame.min_corner;
   for (int ax = 0; ax < 3; ++ax) mo.max_corner[ax] = mo.min_corner[ax] + grid->frame.extent()[ax];
   mo.resolution = o.resolution;
-  BatchField target_field;
+  mesh::BatchField target_field;
   target_field.evaluate = [grid](const Vec3* p, std::size_t n, double* out) {
     for (std::size_t i = 0; i < n; ++i) out[i] = ExtendedSample(*grid, p[i]);
   };
-  MeshingSummary ms_t, ms_q, ms_s;
-  const TriangleMesh target_mesh = MeshField(target_field, mo, &ms_t);
+  mesh::MeshingSummary ms_t, ms_q, ms_s;
+  const mesh::TriangleMesh target_mesh = mesh::MeshField(target_field, mo, &ms_t);
   double m0 = WallSeconds(), c0 = CpuSeconds();
-  const TriangleMesh qj_mesh = MeshField(MakeQuaternionMapField(qj, qjo, 1.0), mo, &ms_q);
+  const mesh::TriangleMesh qj_mesh = mesh::MeshField(mesh::MakeQuaternionMapField(qj, qjo, 1.0), mo, &ms_q);
   const double qj_mesh_s = WallSeconds() - m0, qj_mesh_cpu = CpuSeconds() - c0;
   m0 = WallSeconds(), c0 = CpuSeconds();
-  const TriangleMesh sm_mesh = MeshField(MakeQuaternionMapField(sm, sjo, k), mo, &ms_s);
+  const mesh::TriangleMesh sm_mesh = mesh::MeshField(mesh::MakeQuaternionMapField(sm, sjo, k), mo, &ms_s);
   const double sm_mesh_s = WallSeconds() - m0, sm_mesh_cpu = CpuSeconds() - c0;
-  const auto ts = SampleSurface(target_mesh, o.samples, 1);
-  auto chamfer = [&](const TriangleMesh& m) -> json {
-    const auto ms = SampleSurface(m, o.samples, 2);
+  const auto ts = mesh::SampleSurface(target_mesh, o.samples, 1);
+  auto chamfer = [&](const mesh::TriangleMesh& m) -> json {
+    const auto ms = mesh::SampleSurface(m, o.samples, 2);
     if (ms.empty()) return {{"to_target", nullptr}, {"from_target", nullptr}, {"chamfer", nullptr}};
-    const double to = Mean(NearestPointDistances(ms, ts)), from = Mean(NearestPointDistances(ts, ms));
+    const double to = mesh::Mean(mesh::NearestPointDistances(ms, ts));
+    const double from = mesh::Mean(mesh::NearestPointDistances(ts, ms));
     return {{"to_target", to}, {"from_target", from}, {"chamfer", to + from}};
   };
   const json qj_ch = chamfer(qj_mesh), sm_ch = chamfer(sm_mesh);
-  const Image qj_img = InsideSlice(
+  const Image qj_img = mesh::InsideSlice(
       [&](const Vec3& p) {
         return IterateField(*qj, {p[0], p[1], p[2], 0}, qjo);
       },
       *grid, o.png_size);
-  const Image sm_img = InsideSlice(
+  const Image sm_img = mesh::InsideSlice(
       [&](const Vec3& p) {
         return IterateField(*sm, {k * p[0], k * p[1], k * p[2], 0}, sjo);
       },
       *grid, o.png_size);
   auto method = [&](const std::string& name, json fit, double psi1, double psin, double io, const json& ch,
-                    const TriangleMesh& m, double ms, double mcpu, const std::string& png, const std::string& ply) {
+                    const mesh::TriangleMesh& m, double ms, double mcpu, const std::string& png,
+                    const std::string& ply) {
     return json{{"method", name},
                 {"fit_seconds", fit},
                 {"psi_one_application", psi1},
@@ -223,9 +226,9 @@ CompareResult Compare(const CompareOptions& o) {
   auto path = [&](const std::string& n) { return (std::filesystem::path(o.out_dir) / n).string(); };
   WritePng(path("quijibo.png"), qj_img), outs.Add(path("quijibo.png"));
   WritePng(path("modulus.png"), sm_img), outs.Add(path("modulus.png"));
-  WritePly(path("quijibo.ply"), qj_mesh), outs.Add(path("quijibo.ply"));
-  TriangleMesh sm_fractal = sm_mesh;  // already in the fractal frame (points scaled by k inside the field)
-  WritePly(path("modulus.ply"), sm_fractal), outs.Add(path("modulus.ply"));
+  mesh::WritePly(path("quijibo.ply"), qj_mesh), outs.Add(path("quijibo.ply"));
+  mesh::TriangleMesh sm_fractal = sm_mesh;  // already in the fractal frame (points scaled by k inside the field)
+  mesh::WritePly(path("modulus.ply"), sm_fractal), outs.Add(path("modulus.ply"));
   WriteFileAtomically(path("compare.json"), report.dump(1) + "\n"), outs.Add(path("compare.json"));
   WriteFileAtomically(path("compare.md"), md.str()), outs.Add(path("compare.md"));
   outs.Commit();

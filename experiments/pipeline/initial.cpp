@@ -90,10 +90,11 @@ const Schema<O>& O::Settings() {
               "potential: fit P as the paper's text (positive monopoles only)",
               {"reference", "potential"},
               [](const O& o) {
-                return o.monopole.target == MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
+                return o.monopole.target == monopole::MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
               },
               [](O& o, const std::string& v) {
-                o.monopole.target = v == "reference" ? MonopoleTarget::kOneMinusPotential : MonopoleTarget::kPotential;
+                o.monopole.target = v == "reference" ? monopole::MonopoleTarget::kOneMinusPotential
+                                                     : monopole::MonopoleTarget::kPotential;
               })
           .When(Kind({"monopoles"}))
           .Integer(
@@ -173,8 +174,8 @@ const Schema<O>& O::Settings() {
 
 void O::SetSeeds(std::uint64_t seed) { kernel.seed = monopole.fit.seed = monopole.sampling.seed = random.seed = seed; }
 
-MonopoleOptions O::Monopoles() const {
-  MonopoleOptions m = monopole;
+monopole::MonopoleOptions O::Monopoles() const {
+  monopole::MonopoleOptions m = monopole;
   m.sampling.seed = kernel.seed;  // one sampling seed for both fits
   if (batch) m.fit.batch_size = *batch;
   if (offset) m.shell.offset_cells = *offset;
@@ -231,12 +232,13 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
   }
   const std::string mesh_name = fs::path(target.source).filename().string();
   const int resolution = target.grid.frame.dims[0];
-  MonopoleResult mono;
-  LnCScan scan;
-  KernelFitSummary kfit;
+  monopole::MonopoleResult mono;
+  monopole::LnCScan scan;
+  monopole::KernelFitSummary kfit;
   double scan_seconds = 0;
   if (o.kind == "log-kernel") {
-    res.map = KernelFitMap(target.mesh.vertices, target.mesh.triangles, target.grid, target.frame, o.kernel, &kfit);
+    res.map = monopole::KernelFitMap(target.mesh.vertices, target.mesh.triangles, target.grid, target.frame, o.kernel,
+                                     &kfit);
     res.map.provenance = {{"made_by", "quijibo monopoles"},
                           {"initializer", "log-kernel"},
                           {"mesh", mesh_name},
@@ -252,9 +254,10 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
                           {"refine_rounds", o.kernel.refine_rounds},
                           {"sampling_seed", o.kernel.seed}};
   } else {
-    const MonopoleOptions mo = o.Monopoles();
+    const monopole::MonopoleOptions mo = o.Monopoles();
     Progress progress("monopoles", 1.0, false);
-    mono = FitMonopoles(target.mesh.vertices, target.mesh.triangles, target.grid, mo, [&](const MonopoleProgress& p) {
+    mono = monopole::FitMonopoles(target.mesh.vertices, target.mesh.triangles, target.grid, mo,
+                                  [&](const monopole::MonopoleProgress& p) {
       if (p.stage == "fit")
         progress.update(std::min(0.99, std::log(p.relative_residual) / std::log(mo.fit.epsilon)),
                         "step " + std::to_string(p.step) + ", residual " + std::to_string(p.relative_residual));
@@ -263,7 +266,7 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
     });
     progress.finish();
     const auto t1 = std::chrono::steady_clock::now();
-    res.map = InitialMap(mono.monopoles, target.frame, target.grid, o.guess, &scan);
+    res.map = monopole::InitialMap(mono.monopoles, target.frame, target.grid, o.guess, &scan);
     scan_seconds = Since(t1);
     res.map.provenance = {{"made_by", "quijibo monopoles"},
                           {"initializer", "monopoles"},
@@ -278,7 +281,7 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
                           {"relative_residual", mono.fit.final_relative_residual},
                           {"monopoles", mono.monopoles.size()}};
   }
-  const StartCheck start = CheckStart(res.map, target.grid, o.guess.alpha);
+  const monopole::StartCheck start = monopole::CheckStart(res.map, target.grid, o.guess.alpha);
   if (start.inverted)
     std::fprintf(stderr,
                  "quijibo: warning: the initial map is inverted: L is not lower inside the shape than outside "

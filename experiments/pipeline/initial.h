@@ -24,9 +24,9 @@ struct InitialGuessStageOptions {
   // "log-kernel", "monopoles", "random" or "map". The experiment's default: "log-kernel" for mesh
   // targets, else "random" (Experiment::FromJson).
   std::string kind = "log-kernel";
-  KernelFitOptions kernel;    // log-kernel (kernel.seed: the blue-noise sampling)
-  MonopoleOptions monopole;   // monopoles (monopole.target: fit P or 1 - P)
-  InitialGuessOptions guess;  // monopoles: amplitude, zero roots, ln C scan
+  monopole::KernelFitOptions kernel;    // log-kernel (kernel.seed: the blue-noise sampling)
+  monopole::MonopoleOptions monopole;   // monopoles (monopole.target: fit P or 1 - P)
+  monopole::InitialGuessOptions guess;  // monopoles: amplitude, zero roots, ln C scan
   // monopoles: settings left to the library's default unless given.
   std::optional<int> batch, bem_elements;
   std::optional<double> offset;
@@ -46,7 +46,7 @@ struct InitialGuessStageOptions {
   }
   nlohmann::json ToJson() const;
   // The monopole options with the optional settings applied.
-  MonopoleOptions Monopoles() const;
+  monopole::MonopoleOptions Monopoles() const;
   // Every seed of the guess (sampling, candidate order, random map) set to `seed`.
   void SetSeeds(std::uint64_t seed);
 };

@@ -34,7 +34,8 @@ void WriteRootsPly(const std::string& path, const RationalMap& map, bool user_fr
   WriteFileAtomically(path, header + body);
 }
 
-Image PotentialSlice(const ExteriorPotential& potential, const ScalarGrid& sdf, const RationalMap& map, int size) {
+Image PotentialSlice(const monopole::ExteriorPotential& potential, const ScalarGrid& sdf, const RationalMap& map,
+                     int size) {
   const Vec3 lo = sdf.frame.min_corner;
   const double side = sdf.frame.spacing * sdf.frame.dims[0];
   Image img(size, size);

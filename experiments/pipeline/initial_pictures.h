@@ -14,7 +14,8 @@ namespace quijibo::pipeline {
 // The potential on the slice z = 0 of the fractal frame (through the mesh's centre), grey from 0
 // (black) to 1 (white), the target's outline in green, roots within two cells of the slice as
 // discs: top roots blue, bottom roots red (the idea of the paper's Fig. 8). `size` pixels a side.
-Image PotentialSlice(const ExteriorPotential& potential, const ScalarGrid& sdf, const RationalMap& map, int size);
+Image PotentialSlice(const monopole::ExteriorPotential& potential, const ScalarGrid& sdf, const RationalMap& map,
+                     int size);
 
 // The map's one-step set {L < 0} on the slice z = 0 against the target: both dark grey, set only
 // orange, target only blue; roots within two cells of the slice as discs (top blue, bottom red).

@@ -93,16 +93,16 @@ json MeshStageOptions::ToJson() const {
   return j;
 }
 
-bool LocalMesher(const BatchField& field, const MeshingOptions& o, MeshingSummary* summary, FieldBand* band,
-                 TriangleMesh* mesh, JuliaFieldStats*) {
-  *mesh = MeshField(field, o, summary, band);
+bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& o, mesh::MeshingSummary* summary,
+                 mesh::FieldBand* band, mesh::TriangleMesh* mesh, mesh::JuliaFieldStats*) {
+  *mesh = mesh::MeshField(field, o, summary, band);
   return true;
 }
 
 MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& o, const Mesher& mesher) {
   MeshStageResult r;
   r.meshing = o.meshing;
-  MeshingOptions& m = r.meshing;
+  mesh::MeshingOptions& m = r.meshing;
   const double half = map.frame.fractal_radius / 2;
   const Vec3 c = map.frame.box_center();
   m.min_corner = {c[0] - half, c[1] - half, c[2] - half};
@@ -119,8 +119,8 @@ MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& o, con
         SampleTransform::AxisAngle({o.rotation[0], o.rotation[1], o.rotation[2]}, o.rotation[3], center);
   }
   if (auto why = r.julia.validate(); !why.empty()) throw Error(why);
-  JuliaFieldStats stats;
-  const BatchField field = MakeJuliaField(map, r.julia, o.iso, ParsePrecision(o.precision), &stats);
+  mesh::JuliaFieldStats stats;
+  const mesh::BatchField field = mesh::MakeJuliaField(map, r.julia, o.iso, ParsePrecision(o.precision), &stats);
   const bool want_band = Wants(o, "field");
   r.writer = mesher(field, m, &r.summary, want_band ? &r.band : nullptr, &r.mesh, &stats);
   r.escaped = stats.escaped;
@@ -143,21 +143,21 @@ void CheckMeshFiles(const MeshFiles& f) {
 void WriteMeshFiles(const MeshStageResult& r, const RationalMap& map, const MeshStageOptions& o, const MeshFiles& f) {
   if (r.empty()) return;
   if (Extension(f.out) == ".obj")
-    WriteObj(f.out, r.mesh);
+    mesh::WriteObj(f.out, r.mesh);
   else
-    WritePly(f.out, r.mesh, o.ply_double ? PlyPrecision::kFloat64 : PlyPrecision::kFloat32);
-  if (!f.obj.empty()) WriteObj(f.obj, r.mesh);
+    mesh::WritePly(f.out, r.mesh, o.ply_double ? mesh::PlyPrecision::kFloat64 : mesh::PlyPrecision::kFloat32);
+  if (!f.obj.empty()) mesh::WriteObj(f.obj, r.mesh);
   if (f.vdb.empty()) return;
   const bool user = o.frame == "user";
-  const MeshLattice& l = r.band.lattice;
+  const mesh::MeshLattice& l = r.band.lattice;
   const double spacing = r.summary.spacing / (user ? map.frame.user_to_fractal_scale() : 1.0);
-  VdbVolumeOptions vo;
+  mesh::VdbVolumeOptions vo;
   vo.voxel_size = spacing;
   vo.half_width = o.vdb_band;
   vo.surface = Wants(o, "surface");
   vo.density = Wants(o, "density");
   vo.coordinates = user ? "user" : "fractal";
-  VdbRawField raw;
+  mesh::VdbRawField raw;
   if (Wants(o, "field")) {
     raw.origin = user ? map.frame.fractal_to_user(l.origin) : l.origin;
     raw.spacing = spacing;
@@ -168,7 +168,7 @@ void WriteMeshFiles(const MeshStageResult& r, const RationalMap& map, const Mesh
     raw.name = "julia";
     raw.quantity = "log-modulus";
   }
-  WriteVdbVolumes(f.vdb, r.mesh, vo, Wants(o, "field") ? &raw : nullptr);
+  mesh::WriteVdbVolumes(f.vdb, r.mesh, vo, Wants(o, "field") ? &raw : nullptr);
 }
 
 json JuliaJson(const JuliaOptions& j, double iso, const std::string& precision) {
@@ -184,8 +184,8 @@ json JuliaJson(const JuliaOptions& j, double iso, const std::string& precision) 
 }
 
 json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std::string& map_path, const MeshFiles& f) {
-  const MeshTopology topo = AnalyzeTopology(r.mesh);
-  const MeshingSummary& s = r.summary;
+  const mesh::MeshTopology topo = mesh::AnalyzeTopology(r.mesh);
+  const mesh::MeshingSummary& s = r.summary;
   json summary = {{"map", map_path},
                   {"out", r.empty() ? json(nullptr) : json(f.out)},
                   {"frame", o.frame},
@@ -202,7 +202,7 @@ json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std:
   return summary;
 }
 
-json MesherSummaryJson(const MeshingSummary& s, const MeshingOptions& o) {
+json MesherSummaryJson(const mesh::MeshingSummary& s, const mesh::MeshingOptions& o) {
   return {{"sparse", s.search_stride > 0},
           {"vertices", s.vertices},
           {"triangles", s.triangles},

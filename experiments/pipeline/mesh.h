@@ -19,10 +19,10 @@ namespace quijibo::pipeline {
 inline const std::vector<std::string> kPrecisionNames = {"float", "double", "long-double", "float128"};
 
 struct MeshStageOptions {
-  MeshingOptions meshing;      // resolution and the mesher's settings (box: see `box`)
-  JuliaOptions julia;          // n, escape radius, slice, root translation and scale, placement
-  double iso = 0.0;            // the surface log|q_n| = iso
-  std::string frame = "user";  // coordinates of the output: "user" (the input mesh's) or "fractal"
+  mesh::MeshingOptions meshing;  // resolution and the mesher's settings (box: see `box`)
+  JuliaOptions julia;            // n, escape radius, slice, root translation and scale, placement
+  double iso = 0.0;              // the surface log|q_n| = iso
+  std::string frame = "user";    // coordinates of the output: "user" (the input mesh's) or "fractal"
   std::string precision = "double";
   // The box in the fractal frame, xmin,ymin,zmin,xmax,ymax,zmax; empty: the whole normalized cube
   // (the map's box centre +- fractal_radius / 2).
@@ -50,19 +50,20 @@ struct MeshStageOptions {
 // A mesher meshes exactly like MeshField (mesh, summary, band when not null) and returns false on
 // processes that must not write (MPI workers); it may add other processes' counts into `stats`
 // (quijibo-mpi, docs/mpi.md).
-using Mesher = std::function<bool(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary,
-                                  FieldBand* band, TriangleMesh* mesh, JuliaFieldStats* stats)>;
+using Mesher = std::function<bool(const mesh::BatchField& field, const mesh::MeshingOptions& options,
+                                  mesh::MeshingSummary* summary, mesh::FieldBand* band, mesh::TriangleMesh* mesh,
+                                  mesh::JuliaFieldStats* stats)>;
 // MeshField on this process.
-bool LocalMesher(const BatchField& field, const MeshingOptions& options, MeshingSummary* summary, FieldBand* band,
-                 TriangleMesh* mesh, JuliaFieldStats* stats);
+bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& options, mesh::MeshingSummary* summary,
+                 mesh::FieldBand* band, mesh::TriangleMesh* mesh, mesh::JuliaFieldStats* stats);
 
 struct MeshStageResult {
-  bool writer = true;  // false on processes that do not write (the mesher's answer)
-  TriangleMesh mesh;   // in the output frame (user or fractal, rotation applied)
-  MeshingSummary summary;
-  MeshingOptions meshing;  // as used (the box filled in)
-  JuliaOptions julia;      // as used (the placement's centre filled in)
-  FieldBand band;          // with vdb grid "field"
+  bool writer = true;       // false on processes that do not write (the mesher's answer)
+  mesh::TriangleMesh mesh;  // in the output frame (user or fractal, rotation applied)
+  mesh::MeshingSummary summary;
+  mesh::MeshingOptions meshing;  // as used (the box filled in)
+  JuliaOptions julia;            // as used (the placement's centre filled in)
+  mesh::FieldBand band;          // with vdb grid "field"
   std::int64_t escaped = 0, non_finite = 0;
   bool empty() const { return mesh.triangles.empty(); }
 };
@@ -84,7 +85,7 @@ nlohmann::json MeshSummary(const MeshStageResult& result, const MeshStageOptions
                            const MeshFiles& files);
 // The mesher's part of a summary: sizes, components, open edges (all, and away from the box
 // faces), specks, surface following, evaluations, tiles, blocks, seconds.
-nlohmann::json MesherSummaryJson(const MeshingSummary& summary, const MeshingOptions& options);
+nlohmann::json MesherSummaryJson(const mesh::MeshingSummary& summary, const mesh::MeshingOptions& options);
 // The Julia options as the summaries record them.
 nlohmann::json JuliaJson(const JuliaOptions& julia, double iso, const std::string& precision);
 

@@ -113,7 +113,7 @@ ModulusStageOptions ModulusStageOptions::FromJson(const JsonReader& r, const std
   o.output = ProductOutputOptions::FromJson(r, p + "/output", base, o.output);
   if (o.params) {  // spatially varying alpha/beta, checked now
     ShapeModulusOptions so;
-    ReadModulusParams(*o.params, so, o.sdf_resolution);
+    mesh::ReadModulusParams(*o.params, so, o.sdf_resolution);
   }
   if (std::string why = o.Validate(); !why.empty()) r.fail(p, why);
   return o;
@@ -129,14 +129,14 @@ json ModulusStageOptions::ToJson() const {
 
 ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions& o, const std::string& out) {
   if (std::string why = o.Validate(); !why.empty()) throw Error("modulus: " + why);
-  LoadedTarget lt = LoadModulusTarget(target, o.sdf_resolution);
+  mesh::LoadedTarget lt = mesh::LoadModulusTarget(target, o.sdf_resolution);
   const bool two_d = o.two_d || EndsWith(out, ".png") || lt.target.dimension == 2;
   if (two_d && !EndsWith(out, ".png")) throw Error("2D output must be a .png, found \"" + out + "\"");
   if (lt.target.dimension == 2 && !two_d) throw Error("a 2D target needs a .png output");
   lt.target.dimension = two_d ? 2 : 3;
   ShapeModulusOptions so = o.shape;
   if (o.offset) so.origin_offset = {(*o.offset)[0], (*o.offset)[1], (*o.offset)[2]};
-  if (o.params) ReadModulusParams(*o.params, so, o.sdf_resolution);
+  if (o.params) mesh::ReadModulusParams(*o.params, so, o.sdf_resolution);
   ModulusStageResult res;
   res.versor = o.versor.Make(lt.target);  // roots in the target's own frame
   if (!o.authors_frame.empty()) {

@@ -14,7 +14,7 @@ namespace fs = std::filesystem;
 OptimizeStageOptions OptimizeStageOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
                                                     bool named) {
   OptimizeStageOptions s;
-  s.optimizer = OptimizeOptions::FromJson(r, p, base, {"name"});
+  s.optimizer = optim::OptimizeOptions::FromJson(r, p, base, {"name"});
   if (named) {
     s.name = r.has(p + "/name") ? r.string(p + "/name") : "";
     if (s.name.empty() || s.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") !=
@@ -32,7 +32,7 @@ json OptimizeStageOptions::ToJson() const {
 
 OptimizeStageResult OptimizeStage(const ScalarGrid& target, const RationalMap& initial, const OptimizeStageOptions& s,
                                   const std::string& out_dir, bool resume) {
-  OptimizeOptions o = s.optimizer;
+  optim::OptimizeOptions o = s.optimizer;
   o.out_dir = out_dir;
   o.resume = resume;
   if (auto why = o.Validate(); !why.empty()) throw Error("optimize: " + why);
@@ -46,8 +46,8 @@ OptimizeStageResult OptimizeStage(const ScalarGrid& target, const RationalMap& i
     fs::create_directories(out_dir);
     WriteMap(initial_path, res.map);
   }
-  res.summary = Optimize(target, res.map, o);
-  const OptimizeSummary& sum = res.summary;
+  res.summary = optim::Optimize(target, res.map, o);
+  const optim::OptimizeSummary& sum = res.summary;
   res.map.provenance["optimized"] = {{"schedule", o.schedule.notation()}, {"evaluator", o.evaluator},
                                      {"precision", PrecisionName(o.precision)}, {"backend", o.backend},
                                      {"absolute_energy", sum.absolute_end}, {"best_pass", sum.best_pass},

@@ -14,8 +14,8 @@
 namespace quijibo::pipeline {
 
 struct OptimizeStageOptions {
-  std::string name = "optimized";  // the run's folder (unique among an experiment's optimizers)
-  OptimizeOptions optimizer;       // every setting of the optimization (out_dir, resume: the stage's)
+  std::string name = "optimized";    // the run's folder (unique among an experiment's optimizers)
+  optim::OptimizeOptions optimizer;  // every setting of the optimization (out_dir, resume: the stage's)
 
   // The experiment's optimizer object at `pointer`; `named`: "name" is required (an array entry).
   static OptimizeStageOptions FromJson(const JsonReader& r, const std::string& pointer,
@@ -25,7 +25,7 @@ struct OptimizeStageOptions {
 
 struct OptimizeStageResult {
   RationalMap map;  // the optimized map (provenance "optimized" added)
-  OptimizeSummary summary;
+  optim::OptimizeSummary summary;
 };
 
 // Optimizes `initial` on `target` into `out_dir` (initial_map.json, map.json, log.jsonl,

@@ -51,13 +51,13 @@ json PicturesOptions::ToJson() const {
 }
 
 SlicePicture SliceAgainstTargetPicture(const RationalMap& map, const ScalarGrid& target, const std::string& target_path,
-                                       const SliceView& view, const JuliaOptions& julia, double iso,
+                                       const mesh::SliceView& view, const JuliaOptions& julia, double iso,
                                        const std::string& precision) {
   if (target.coordinates != "fractal")
     throw Error(target_path + ": expected a grid in fractal coordinates, found \"" + target.coordinates + "\"");
-  const std::string frame_path = FrameJsonPathFor(target_path);
+  const std::string frame_path = mesh::FrameJsonPathFor(target_path);
   if (fs::exists(frame_path)) {
-    const FractalFrame f = ReadFrameJson(frame_path);
+    const FractalFrame f = mesh::ReadFrameJson(frame_path);
     const auto same = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); };
     if (!same(f.scale, map.frame.scale) || !same(f.fractal_radius, map.frame.fractal_radius) ||
         !same(f.translation[0], map.frame.translation[0]) || !same(f.translation[1], map.frame.translation[1]) ||
@@ -66,15 +66,15 @@ SlicePicture SliceAgainstTargetPicture(const RationalMap& map, const ScalarGrid&
   }
   if (auto why = view.validate(); !why.empty()) throw Error("picture: " + why);
   if (auto why = julia.validate(); !why.empty()) throw Error(why);
-  const BatchField field = MakeJuliaField(map, julia, iso, ParsePrecision(precision));
+  const mesh::BatchField field = mesh::MakeJuliaField(map, julia, iso, ParsePrecision(precision));
   SlicePicture p;
-  p.image = SliceAgainstTarget(field, target, view, &p.agreement);
+  p.image = mesh::SliceAgainstTarget(field, target, view, &p.agreement);
   return p;
 }
 
 json SliceReport(const SlicePicture& p, const std::string& out, const JuliaOptions& julia, double iso,
                  const std::string& precision) {
-  const SliceAgreement& a = p.agreement;
+  const mesh::SliceAgreement& a = p.agreement;
   return {{"out", out},
           {"agreement", a.agreement()},
           {"both_inside", a.both_inside},
@@ -84,8 +84,8 @@ json SliceReport(const SlicePicture& p, const std::string& out, const JuliaOptio
           {"julia", JuliaJson(julia, iso, precision)}};
 }
 
-SliceView TargetSliceView(const ScalarGrid& target, const PicturesOptions& o) {
-  SliceView v = o.slice;
+mesh::SliceView TargetSliceView(const ScalarGrid& target, const PicturesOptions& o) {
+  mesh::SliceView v = o.slice;
   const Vec3 lo = target.frame.min_corner, ext = target.frame.extent();
   v.min_corner = lo;
   v.max_corner = {lo[0] + ext[0], lo[1] + ext[1], lo[2] + ext[2]};
@@ -96,7 +96,7 @@ void Pictures(const PicturesOptions& o, const RationalMap& initial, const Ration
               const std::string& target_path, const std::string& mesh_path, const std::string& dir) {
   if (auto why = o.Validate(); !why.empty()) throw Error("pictures: " + why);
   const ScalarGrid target = ReadGrid(target_path);
-  const SliceView view = TargetSliceView(target, o);
+  const mesh::SliceView view = TargetSliceView(target, o);
   JuliaOptions julia;
   julia.iterations = o.slice_iterations;
   const std::string n = std::to_string(o.slice_iterations);
@@ -107,7 +107,7 @@ void Pictures(const PicturesOptions& o, const RationalMap& initial, const Ration
     WritePng(png, p.image);
     WriteFileAtomically(dir + "/" + name + ".out", SliceReport(p, png, julia, 0.0, "double").dump(2) + "\n");
   }
-  if (!mesh_path.empty()) WritePng(dir + "/render.png", RenderMesh(ReadMesh(mesh_path), o.render));
+  if (!mesh_path.empty()) WritePng(dir + "/render.png", mesh::RenderMesh(mesh::ReadMesh(mesh_path), o.render));
 }
 
 }  // namespace quijibo::pipeline

@@ -15,10 +15,10 @@
 namespace quijibo::pipeline {
 
 struct PicturesOptions {
-  bool enabled = true;       // quijibo run
-  int slice_iterations = 1;  // n of the slices against the target: the one-step set the energy fits
-  SliceView slice;           // size (the run: axis z at 0 over the target's box)
-  RenderOptions render;      // size and views of the render
+  bool enabled = true;         // quijibo run
+  int slice_iterations = 1;    // n of the slices against the target: the one-step set the energy fits
+  mesh::SliceView slice;       // size (the run: axis z at 0 over the target's box)
+  mesh::RenderOptions render;  // size and views of the render
 
   std::string Validate() const;
   static const Schema<PicturesOptions>& Settings();
@@ -32,21 +32,21 @@ struct PicturesOptions {
 
 struct SlicePicture {
   Image image{1, 1};
-  SliceAgreement agreement;
+  mesh::SliceAgreement agreement;
 };
 
 // The set {log|q_n| < iso} of `map` against {target < 0} on `view` (mesh/pictures.h). `target`
 // must be in the fractal frame, and its frame file (`target_path`'s .frame.json, when present)
 // the map's. Throws quijibo::Error otherwise.
 SlicePicture SliceAgainstTargetPicture(const RationalMap& map, const ScalarGrid& target, const std::string& target_path,
-                                       const SliceView& view, const JuliaOptions& julia, double iso,
+                                       const mesh::SliceView& view, const JuliaOptions& julia, double iso,
                                        const std::string& precision);
 // The report of a slice (the standard output of `quijibo picture slice`).
 nlohmann::json SliceReport(const SlicePicture& picture, const std::string& out, const JuliaOptions& julia, double iso,
                            const std::string& precision);
 
 // The view the run's slices use: the plane z = 0 across the target grid's box.
-SliceView TargetSliceView(const ScalarGrid& target, const PicturesOptions& options);
+mesh::SliceView TargetSliceView(const ScalarGrid& target, const PicturesOptions& options);
 
 // The run's pictures into `dir`: slice-n<N>.png of `optimized`, initial-slice-n<N>.png of
 // `initial` (N = slice_iterations; their reports as slice.out and initial-slice.out), and

@@ -103,7 +103,7 @@ json PortalStageOptions::ToJson() const {
 json PortalStageOptions::SpecDocument(std::string* source) const {
   json doc;
   if (koch) {
-    doc = KochSpec(turbulent ? 30.0 : 3000.0, 0.0, turbulent, feather);
+    doc = mesh::KochSpec(turbulent ? 30.0 : 3000.0, 0.0, turbulent, feather);
     *source = "--koch preset";
   } else if (!spec_file.empty()) {
     *source = spec_file;
@@ -121,7 +121,7 @@ PortalStageResult Portal(const PortalStageOptions& o, const std::string& out) {
   PortalStageResult res;
   std::string source;
   res.spec = o.SpecDocument(&source);
-  PortalScene s = SceneFromSpec(res.spec, source, o.sdf_resolution);
+  mesh::PortalScene s = mesh::SceneFromSpec(res.spec, source, o.sdf_resolution);
   res.poly = s.poly;
   ProductOutputOptions output = o.output;
   IterationOptions jo;

@@ -113,7 +113,7 @@ Product Produce(std::shared_ptr<const QuaternionMap> map, const ProductOutputOpt
     p.image = FieldImage(field, v, std::log(jo.escape_radius));
     p.report = {{"pixels", field.size()}, {"inside_pixels", inside}, {"view", {v.x_min, v.y_min, v.x_max, v.y_max}}};
   } else {
-    MeshingOptions mo = o.meshing;
+    mesh::MeshingOptions mo = o.meshing;
     if (!box.empty()) {
       if (box.size() != 6) throw Error("--box needs 6 numbers in 3D (x0 y0 z0 x1 y1 z1)");
       mo.min_corner = {box[0], box[1], box[2]};
@@ -125,8 +125,8 @@ Product Produce(std::shared_ptr<const QuaternionMap> map, const ProductOutputOpt
       }
     }
     if (auto why = mo.validate(); !why.empty()) throw Error("meshing: " + why);
-    MeshingSummary ms;
-    p.mesh = MeshField(MakeQuaternionMapField(map, jo, 1.0), mo, &ms);
+    mesh::MeshingSummary ms;
+    p.mesh = mesh::MeshField(mesh::MakeQuaternionMapField(map, jo, 1.0), mo, &ms);
     p.kind = "ply";
     p.report = MesherSummaryJson(ms, mo);
     p.report["box"] = {mo.min_corner[0], mo.min_corner[1], mo.min_corner[2],
@@ -149,7 +149,7 @@ void WriteProduct(const Product& p, const std::string& path) {
     WritePng(path, p.image);
   } else {
     if (!EndsWith(path, ".ply")) throw Error("3D output must be a .ply, found \"" + path + "\"");
-    WritePly(path, p.mesh);
+    mesh::WritePly(path, p.mesh);
   }
 }
 

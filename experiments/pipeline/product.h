@@ -19,9 +19,9 @@
 namespace quijibo::pipeline {
 
 struct ProductOutputOptions {
-  std::string format = "ply";  // "ply" (3D mesh) or "png" (2D); a stage's default may differ
-  MeshingOptions meshing;      // 3D: resolution and the mesher's settings (the box is set here)
-  View2D view;                 // 2D: width (= height) in pixels (the region is set here)
+  std::string format = "ply";    // "ply" (3D mesh) or "png" (2D); a stage's default may differ
+  mesh::MeshingOptions meshing;  // 3D: resolution and the mesher's settings (the box is set here)
+  View2D view;                   // 2D: width (= height) in pixels (the region is set here)
   // Unset: the method's (the shape modulus: IterationOptions' defaults; portals: the spec's).
   std::optional<int> iterations;
   std::optional<double> escape;
@@ -43,7 +43,7 @@ struct ProductOutputOptions {
 struct Product {
   std::string kind;  // "png" or "ply"
   Image image{1, 1};
-  TriangleMesh mesh;
+  mesh::TriangleMesh mesh;
   nlohmann::json report;  // sizes, region, evaluations, seconds
 };
 

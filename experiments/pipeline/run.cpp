@@ -86,7 +86,7 @@ void Runner::Quijibo() {
   if (!t.mesh.empty()) files.push_back(t.mesh);
   if (!t.qgrid.empty()) {
     files.push_back(t.qgrid);
-    if (fs::exists(FrameJsonPathFor(t.qgrid))) files.push_back(FrameJsonPathFor(t.qgrid));
+    if (fs::exists(mesh::FrameJsonPathFor(t.qgrid))) files.push_back(mesh::FrameJsonPathFor(t.qgrid));
   }
   if (in.kind == "map") files.push_back(in.map);
   const json initial_inputs = {{"target", t.ToJson()}, {"initial", in.ToJson()}};
@@ -167,7 +167,7 @@ void Runner::Quijibo() {
 
 void Runner::RenderStage(const std::string& mesh, const std::string& upstream) {
   cache_.Run("pictures", "pictures", e_.pictures.ToJson(), {}, {upstream}, [&](const std::string& dir) {
-    WritePng(dir + "/render.png", RenderMesh(ReadMesh(P(mesh)), e_.pictures.render));
+    WritePng(dir + "/render.png", mesh::RenderMesh(mesh::ReadMesh(P(mesh)), e_.pictures.render));
   });
 }
 

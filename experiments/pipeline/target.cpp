@@ -63,17 +63,19 @@ const Schema<TargetOptions>& TargetOptions::Settings() {
               "inside: the fractal origin at the point deepest inside the shape, where iterating the map traps "
               "orbits; center: at the bounding box's centre, as the reference code (mesh/normalize.h)",
               {"inside", "center"},
-              [](const TargetOptions& o) { return OriginPlacementName(o.origin.value_or(OriginPlacement::kCenter)); },
-              [](TargetOptions& o, const std::string& v) { o.origin = ParseOriginPlacement(v); })
+              [](const TargetOptions& o) {
+                return mesh::OriginPlacementName(o.origin.value_or(mesh::OriginPlacement::kCenter));
+              },
+              [](TargetOptions& o, const std::string& v) { o.origin = mesh::ParseOriginPlacement(v); })
           .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin.has_value(); })
           .Enum(
               "frame_scale", "--frame-scale",
               "trap: fractal_radius chosen so that the unit ball about the origin, where the map sends the "
               "one-step set, just fits inside the shape (the n-step set keeps thin parts); fixed: fractal_radius "
               "as given, as the reference code (mesh/normalize.h)",
-              {"trap", "fixed"}, [](const TargetOptions& o) { return FrameScaleName(o.frame_scale); },
-              [](TargetOptions& o, const std::string& v) { o.frame_scale = ParseFrameScale(v); })
-          .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin == OriginPlacement::kInside; });
+              {"trap", "fixed"}, [](const TargetOptions& o) { return mesh::FrameScaleName(o.frame_scale); },
+              [](TargetOptions& o, const std::string& v) { o.frame_scale = mesh::ParseFrameScale(v); })
+          .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin == mesh::OriginPlacement::kInside; });
   return s;
 }
 
@@ -122,23 +124,23 @@ TargetResult Target(const TargetOptions& o) {
   if (const std::string why = o.Validate(); !why.empty()) throw Error("target: " + why);
   TargetResult t;
   if (!o.mesh.empty()) {
-    const TriangleMesh user = ReadMesh(o.mesh, &t.read_report);
-    t.frame = NormalizationFor(user, o.padding, o.fractal_radius);
-    if (o.origin == OriginPlacement::kInside) {
-      t.frame = PlaceOriginInside(user, t.frame, o.mesh);
-      if (o.frame_scale == FrameScale::kTrap) t.frame = ScaleToTrap(user, t.frame, o.mesh);
+    const mesh::TriangleMesh user = mesh::ReadMesh(o.mesh, &t.read_report);
+    t.frame = mesh::NormalizationFor(user, o.padding, o.fractal_radius);
+    if (o.origin == mesh::OriginPlacement::kInside) {
+      t.frame = mesh::PlaceOriginInside(user, t.frame, o.mesh);
+      if (o.frame_scale == mesh::FrameScale::kTrap) t.frame = mesh::ScaleToTrap(user, t.frame, o.mesh);
     }
-    t.mesh = ToFractalFrame(user, t.frame);
-    SdfOptions sdf;
+    t.mesh = mesh::ToFractalFrame(user, t.frame);
+    mesh::SdfOptions sdf;
     sdf.name = o.mesh;
     const auto t0 = std::chrono::steady_clock::now();
-    t.grid = SignedDistance(t.mesh, TargetGridFrame(o.resolution, t.frame, o.box), sdf);
+    t.grid = mesh::SignedDistance(t.mesh, TargetGridFrame(o.resolution, t.frame, o.box), sdf);
     t.sdf_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     t.source = o.mesh;
   } else if (!o.qgrid.empty()) {
     t.grid = ReadGrid(o.qgrid);
-    const std::string fp = FrameJsonPathFor(o.qgrid);
-    if (fs::exists(fp)) t.frame = ReadFrameJson(fp);
+    const std::string fp = mesh::FrameJsonPathFor(o.qgrid);
+    if (fs::exists(fp)) t.frame = mesh::ReadFrameJson(fp);
     t.source = o.qgrid;
   } else {
     // Analytic shapes live in the default frame, on the reference box.
@@ -151,7 +153,8 @@ TargetResult Target(const TargetOptions& o) {
 void WriteTarget(const TargetResult& t, const TargetOptions& o, const std::string& dir) {
   const std::string grid = dir + "/target.qgrid";
   WriteGrid(grid, t.grid);
-  WriteFrameJson(FrameJsonPathFor(grid), t.frame, t.source, o.mesh.empty() ? t.grid.frame.dims[0] : o.resolution);
+  mesh::WriteFrameJson(mesh::FrameJsonPathFor(grid), t.frame, t.source,
+                       o.mesh.empty() ? t.grid.frame.dims[0] : o.resolution);
 }
 
 }  // namespace quijibo::pipeline

@@ -27,9 +27,9 @@ struct TargetOptions {
   TargetBox box = TargetBox::kUnitCube;  // mesh targets
   // Mesh targets of the QUIJIBO method: where the fractal origin goes; unset for the other
   // methods (their unit frame has no fractal origin).
-  std::optional<OriginPlacement> origin = OriginPlacement::kInside;
+  std::optional<mesh::OriginPlacement> origin = mesh::OriginPlacement::kInside;
   // With the origin inside: trap chooses fractal_radius (ScaleToTrap), fixed keeps the one given.
-  FrameScale frame_scale = FrameScale::kTrap;
+  mesh::FrameScale frame_scale = mesh::FrameScale::kTrap;
 
   std::string kind() const;      // "mesh", "qgrid" or "analytic" ("" when none is set)
   std::string Validate() const;  // empty when valid
@@ -44,11 +44,11 @@ struct TargetOptions {
 };
 
 struct TargetResult {
-  ScalarGrid grid;     // the signed distance on the target grid, fractal frame
-  FractalFrame frame;  // user -> fractal frame (identity frame for analytic targets)
-  std::string source;  // the mesh or .qgrid path, or "analytic:<spec>"
-  TriangleMesh mesh;   // mesh targets: the mesh in the fractal frame
-  MeshReadReport read_report;
+  ScalarGrid grid;          // the signed distance on the target grid, fractal frame
+  FractalFrame frame;       // user -> fractal frame (identity frame for analytic targets)
+  std::string source;       // the mesh or .qgrid path, or "analytic:<spec>"
+  mesh::TriangleMesh mesh;  // mesh targets: the mesh in the fractal frame
+  mesh::MeshReadReport read_report;
   double sdf_seconds = 0;
 };
 

@@ -321,7 +321,7 @@ struct MeshResult {
   py::dict summary;
 };
 
-MeshResult FromTriangleMesh(const TriangleMesh& mesh, py::dict summary) {
+MeshResult FromTriangleMesh(const mesh::TriangleMesh& mesh, py::dict summary) {
   MeshResult r;
   r.vertices = Points(mesh.vertices);
   r.faces = py::array_t<std::int32_t>({py::ssize_t(mesh.triangles.size()), py::ssize_t(3)});
@@ -332,8 +332,8 @@ MeshResult FromTriangleMesh(const TriangleMesh& mesh, py::dict summary) {
   return r;
 }
 
-TriangleMesh ToTriangleMesh(const Array& vertices, const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& faces) {
-  TriangleMesh mesh;
+mesh::TriangleMesh ToTriangleMesh(const Array& vertices, const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& faces) {
+  mesh::TriangleMesh mesh;
   mesh.vertices = PointsFrom(vertices, "vertices");
   if (faces.ndim() != 2 || faces.shape(1) != 3) throw Error("faces: expected an integer array of shape (M, 3)");
   auto f = faces.unchecked<2>();
@@ -374,9 +374,10 @@ MeshResult Mesh(const RationalMap& map, int resolution, int iterations, bool all
   Interrupt interrupt;
   // The local mesher on a field that, once interrupted, skips the remaining batches (NaN:
   // outside); the mesh is then dropped.
-  const pipeline::Mesher mesher = [&interrupt](const BatchField& field, const MeshingOptions& o, MeshingSummary* s,
-                                               FieldBand* band, TriangleMesh* mesh, JuliaFieldStats* stats) {
-    BatchField polled = field;
+  const pipeline::Mesher mesher = [&interrupt](const mesh::BatchField& field, const mesh::MeshingOptions& o,
+                                               mesh::MeshingSummary* s, mesh::FieldBand* band, mesh::TriangleMesh* mesh,
+                                               mesh::JuliaFieldStats* stats) {
+    mesh::BatchField polled = field;
     polled.evaluate = [inner = field.evaluate, &interrupt](const Vec3* p, std::size_t n, double* v) {
       if (interrupt.Poll()) {
         std::fill(v, v + n, std::numeric_limits<double>::quiet_NaN());
@@ -407,12 +408,12 @@ MeshResult Mesh(const RationalMap& map, int resolution, int iterations, bool all
 
 // Hands every record of the run (a log.jsonl line, as a dict) to a Python callable; a true result
 // aborts the run (optim/iteration_callback.h), an exception aborts it and is raised afterwards.
-class PythonCallback : public IterationCallback {
+class PythonCallback : public optim::IterationCallback {
  public:
   // Made and destroyed with the GIL held.
   explicit PythonCallback(py::object fn) : fn_(std::move(fn)) {}
-  CallbackReturnType operator()(const IterationSummary& s) override {
-    if (stopped_) return CallbackReturnType::kAbort;
+  optim::CallbackReturnType operator()(const optim::IterationSummary& s) override {
+    if (stopped_) return optim::CallbackReturnType::kAbort;
     py::gil_scoped_acquire gil;
     try {
       if (py::bool_(fn_(FromJson(s.ToJson())))) stopped_ = true;
@@ -420,7 +421,7 @@ class PythonCallback : public IterationCallback {
       error_ = std::make_unique<py::error_already_set>(std::move(e));
       stopped_ = true;
     }
-    return stopped_ ? CallbackReturnType::kAbort : CallbackReturnType::kContinue;
+    return stopped_ ? optim::CallbackReturnType::kAbort : optim::CallbackReturnType::kContinue;
   }
   // With the GIL held: the callback's exception, if it raised one.
   void Rethrow() {
@@ -459,7 +460,8 @@ py::tuple OptimizeMap(const ScalarGrid& target, const RationalMap& initial, py::
   CheckMap(initial, "optimize");
   json j = ToJson(settings, "optimize");
   if (!schedule.is_none()) j["schedule"] = ToJson(schedule, "optimize/schedule");
-  OptimizeOptions options = OptimizeOptions::FromJson(JsonReader(j, "optimize"), "", std::filesystem::current_path());
+  optim::OptimizeOptions options =
+      optim::OptimizeOptions::FromJson(JsonReader(j, "optimize"), "", std::filesystem::current_path());
   std::unique_ptr<TemporaryFolder> temporary;
   if (out.is_none()) {
     if (resume) throw Error("optimize: resume=True needs the folder of the interrupted run (out=...)");
@@ -477,10 +479,10 @@ py::tuple OptimizeMap(const ScalarGrid& target, const RationalMap& initial, py::
   }
   if (auto why = options.Validate(); !why.empty()) throw Error("optimize: " + why);
   RationalMap map = initial;
-  OptimizeSummary summary;
+  optim::OptimizeSummary summary;
   {
     py::gil_scoped_release release;
-    summary = Optimize(target, map, options);
+    summary = optim::Optimize(target, map, options);
   }
   if (observer) observer->Rethrow();
   if (!summary.complete && summary.stop_reason == "interrupted") {
@@ -983,11 +985,11 @@ PYBIND11_MODULE(quijibo, m) {
   m.def(
       "read_mesh",
       [](const std::string& path) {
-        MeshReadReport report;
-        TriangleMesh mesh;
+        mesh::MeshReadReport report;
+        mesh::TriangleMesh mesh;
         {
           py::gil_scoped_release release;
-          mesh = ReadMesh(path, &report);
+          mesh = mesh::ReadMesh(path, &report);
         }
         return FromTriangleMesh(mesh, FromJson({{"faces_read", report.faces_read},
                                                 {"degenerate_dropped", report.degenerate_dropped},
@@ -1000,10 +1002,10 @@ PYBIND11_MODULE(quijibo, m) {
       [](py::object mesh, const std::string& path, bool double_precision) {
         const py::tuple vf = py::tuple(mesh);
         if (vf.size() != 2) throw Error("write_mesh: expected a Mesh or (vertices, faces)");
-        const TriangleMesh t = ToTriangleMesh(vf[0].cast<Array>(), vf[1].cast<py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>>());
+        const mesh::TriangleMesh t = ToTriangleMesh(vf[0].cast<Array>(), vf[1].cast<py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>>());
         const std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
-        if (ext == ".obj" || ext == ".OBJ") WriteObj(path, t);
-        else if (ext == ".ply" || ext == ".PLY") WritePly(path, t, double_precision ? PlyPrecision::kFloat64 : PlyPrecision::kFloat32);
+        if (ext == ".obj" || ext == ".OBJ") mesh::WriteObj(path, t);
+        else if (ext == ".ply" || ext == ".PLY") mesh::WritePly(path, t, double_precision ? mesh::PlyPrecision::kFloat64 : mesh::PlyPrecision::kFloat32);
         else throw Error(path + ": the mesh must end in .ply or .obj");
       },
       py::arg("mesh"), py::arg("path"), py::kw_only(), py::arg("double") = false,

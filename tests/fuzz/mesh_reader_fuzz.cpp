@@ -18,8 +18,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static const char* const kNames[] = {"input.obj", "input.ply", "input.stl", "input.off"};
   const std::string path = quijibo::fuzz::WriteInput(kNames[data[0] % 4], data + 1, size - 1);
   try {
-    quijibo::MeshReadReport report;
-    const quijibo::TriangleMesh mesh = quijibo::ReadMesh(path, &report);
+    quijibo::mesh::MeshReadReport report;
+    const quijibo::mesh::TriangleMesh mesh = quijibo::mesh::ReadMesh(path, &report);
     if (mesh.triangles.empty()) std::abort();
     const auto n = std::int64_t(mesh.vertices.size());
     for (const auto& v : mesh.vertices)

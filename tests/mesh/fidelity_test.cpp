@@ -8,7 +8,7 @@
 #include "quijibo/error.h"
 #include "quijibo/target.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 namespace {
 
 // One top root at the centre: L = ln C + log|q|, the one-step set is the ball of radius e^-lnC.
@@ -76,4 +76,4 @@ TEST(Fidelity, RejectsBadOptions) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::mesh

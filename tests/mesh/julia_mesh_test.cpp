@@ -11,7 +11,7 @@
 #include "mesh_fixtures.h"
 #include "quijibo/rational_map.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 namespace {
 
 // A small random map whose set at n = 1 contains the origin: ln C puts L(0) at -1.
@@ -130,4 +130,4 @@ TEST(JuliaMesh, PicturesHaveTheRightSizeAndColours) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::mesh

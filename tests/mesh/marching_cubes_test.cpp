@@ -14,7 +14,7 @@
 #include "mesh_fixtures.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 namespace {
 
 using testing::TempDir;
@@ -251,4 +251,4 @@ TEST(MarchingCubes, InvalidOptionsThrow) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -19,9 +19,9 @@ namespace quijibo::testing {
 
 // Icosahedron subdivided `levels` times, vertices projected on the sphere (centre, radius),
 // faces counter-clockwise seen from outside.
-inline TriangleMesh Icosphere(int levels, const Vec3& centre = {0, 0, 0}, double radius = 1.0) {
+inline mesh::TriangleMesh Icosphere(int levels, const Vec3& centre = {0, 0, 0}, double radius = 1.0) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  TriangleMesh m;
+  mesh::TriangleMesh m;
   m.vertices = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
@@ -89,7 +89,7 @@ class TempDir {
 
 // The mesh as a multiset of triangles of positions, each rotated so its smallest vertex comes
 // first: equal for two meshes that differ only in vertex and face order.
-inline std::multiset<std::array<Vec3, 3>> Canonical(const TriangleMesh& m) {
+inline std::multiset<std::array<Vec3, 3>> Canonical(const mesh::TriangleMesh& m) {
   std::multiset<std::array<Vec3, 3>> s;
   for (const auto& t : m.triangles) {
     std::array<Vec3, 3> p{m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]};

@@ -12,7 +12,7 @@
 #include "mesh_fixtures.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 namespace {
 
 using testing::TempDir;
@@ -331,4 +331,4 @@ TEST(Normalization, RejectsPointMeshAndBadPadding) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -14,7 +14,7 @@
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 namespace {
 
 using testing::Icosphere;
@@ -257,4 +257,4 @@ TEST(SdfCommand, FailureLeavesNoOutput) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -14,7 +14,7 @@
 #include "mesh_fixtures.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 namespace {
 
 using testing::TempDir;
@@ -103,4 +103,4 @@ TEST(VdbVolumes, LevelSetAndDensityOfAMeshedBall) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::mesh

@@ -14,7 +14,7 @@
 #include "mesh_fixtures.h"
 #include "quijibo_command.h"
 
-namespace quijibo {
+namespace quijibo::mesh {
 namespace {
 
 BatchField Lambda(std::function<double(const Vec3&)> f) {
@@ -149,4 +149,4 @@ TEST(ModulusCli, BunnyModulusMeshIsWatertightAndSparseIsDenseMinusComponents) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::mesh

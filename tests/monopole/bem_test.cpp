@@ -8,7 +8,7 @@
 #include "quijibo/error.h"
 #include "test_meshes.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 namespace {
 
 // Brute force: the triangle split into 4^levels pieces, midpoint-free 3-point rule on each.
@@ -154,9 +154,9 @@ TEST(Bem, BadOptionsAndMeshesAreRejected) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::monopole
 
-namespace quijibo {
+namespace quijibo::monopole {
 namespace {
 
 TEST(Bem, GmresAndLuAgree) {
@@ -176,4 +176,4 @@ TEST(Bem, GmresAndLuAgree) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -8,7 +8,7 @@
 #include "quijibo/frame.h"
 #include "quijibo/target.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 namespace {
 
 // A sphere of radius a about the origin on a 49^3 grid of side 4 (fractal frame).
@@ -83,4 +83,4 @@ TEST(InitialGuess, BadInputIsRejected) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -8,7 +8,7 @@
 #include "monopole/test_meshes.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 namespace {
 
 // The exact signed distance of a union of two spheres (a dumbbell without a bar), and the
@@ -203,4 +203,4 @@ TEST(KernelFit, RejectsBadOptions) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::monopole

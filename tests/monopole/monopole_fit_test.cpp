@@ -13,7 +13,7 @@
 #include "quijibo/error.h"
 #include "test_meshes.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 namespace {
 
 // Points on the sphere of radius r about c (icosphere vertices, level 3: 642 points).
@@ -215,4 +215,4 @@ TEST(Monopole, ZeroTargetGivesNoMonopoles) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::monopole

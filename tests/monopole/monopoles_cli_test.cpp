@@ -12,7 +12,7 @@
 #include "quijibo/grid.h"
 #include "quijibo/rational_map.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 namespace {
 
 int RunQuijibo(const std::string& args, std::string* out = nullptr) {
@@ -92,4 +92,4 @@ TEST(MonopolesCommand, FailureLeavesNoOutput) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::monopole

@@ -7,7 +7,7 @@
 #include "quijibo/error.h"
 #include "test_meshes.h"
 
-namespace quijibo {
+namespace quijibo::monopole {
 namespace {
 
 double MinPairDistance(const std::vector<Vec3>& p) {
@@ -78,4 +78,4 @@ TEST(Sampling, BadOptionsAreRejected) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::monopole

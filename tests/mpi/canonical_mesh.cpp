@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const quijibo::TriangleMesh m = quijibo::ReadMesh(argv[1]);
+    const quijibo::mesh::TriangleMesh m = quijibo::mesh::ReadMesh(argv[1]);
     std::vector<std::size_t> order(m.vertices.size());
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {

@@ -9,7 +9,7 @@
 #include "optim/small_run.h"
 #include "quijibo/cached_energy.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 namespace {
 
 std::string TempDir(const std::string& name) {
@@ -118,4 +118,4 @@ TEST(PrecisionsThroughOptimize, EachPrecisionGivesWhatItsRangeAllows) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::optim

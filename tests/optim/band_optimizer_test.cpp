@@ -6,7 +6,7 @@
 #include "optim/optimizer.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 namespace {
 
 std::string BandTempDir(const std::string& name) {
@@ -79,4 +79,4 @@ TEST(BandOptimizerTest, EvaluatorNamesResolve) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::optim

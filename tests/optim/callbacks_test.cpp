@@ -12,7 +12,7 @@
 #include "output_compare.h"
 #include "quijibo/error.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 namespace {
 
 namespace fs = std::filesystem;
@@ -251,4 +251,4 @@ TEST_F(ResumeRefusal, TheInitialMap) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::optim

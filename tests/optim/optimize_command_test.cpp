@@ -7,7 +7,7 @@
 
 #include "quijibo_command.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 namespace {
 
 namespace fs = std::filesystem;
@@ -77,4 +77,4 @@ TEST_F(OptimizeCommand, ResumeWithOtherSettingsIsRefusedNamingTheSetting) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::optim

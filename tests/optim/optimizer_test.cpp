@@ -15,7 +15,7 @@
 #include "quijibo/json_reader.h"
 #include "optim/small_run.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 namespace {
 
 TEST(ScheduleTest, ParsesThePapersNotation) {
@@ -345,4 +345,4 @@ TEST(OptimizerTest, RunsEndToEndInLongDoubleWithTheCachedEvaluator) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::optim

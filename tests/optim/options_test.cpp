@@ -9,7 +9,7 @@
 #include "quijibo/error.h"
 #include "quijibo/json_reader.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 namespace {
 
 using nlohmann::json;
@@ -125,4 +125,4 @@ TEST(OptimizeOptionsTest, ValidateNamesTheSettingAndItsRange) {
 }
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::optim

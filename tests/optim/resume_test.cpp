@@ -12,7 +12,7 @@
 #include "output_compare.h"
 #include "quijibo_command.h"
 
-namespace quijibo {
+namespace quijibo::optim {
 namespace {
 
 namespace fs = std::filesystem;
@@ -101,4 +101,4 @@ TEST_P(KillResume, ResumedRunsMatchAnUninterruptedOneByteForByte) {
 INSTANTIATE_TEST_SUITE_P(Backends, KillResume, ::testing::Values("lbfgspp", "ceres"));
 
 }  // namespace
-}  // namespace quijibo
+}  // namespace quijibo::optim

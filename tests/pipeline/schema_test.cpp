@@ -39,7 +39,7 @@ TEST(ExperimentSchema, AMinimalQuijiboExperimentResolvesToTheOptionsDefaults) {
   EXPECT_EQ(r["target"], target.ToJson());
   EXPECT_EQ(r["initial"], InitialGuessStageOptions().ToJson());  // log-kernel for a mesh target
   ASSERT_EQ(r["optimizer"].size(), 1u);
-  json optimizer = OptimizeOptions().ToJson();
+  json optimizer = optim::OptimizeOptions().ToJson();
   optimizer["name"] = "optimized";
   EXPECT_EQ(r["optimizer"][0], optimizer);
   MeshStageOptions mesh;
@@ -50,9 +50,9 @@ TEST(ExperimentSchema, AMinimalQuijiboExperimentResolvesToTheOptionsDefaults) {
   EXPECT_EQ(r["seed"], json(kDefaultSeed));
   // The values the documentation promises, from the structs that own them.
   EXPECT_EQ(r["target"]["padding"], FractalFrame{}.padding);
-  EXPECT_EQ(r["mesh"]["resolution"], MeshingOptions{}.resolution);
+  EXPECT_EQ(r["mesh"]["resolution"], mesh::MeshingOptions{}.resolution);
   EXPECT_EQ(r["mesh"]["iterations"], JuliaOptions{}.iterations);
-  EXPECT_EQ(r["initial"]["roots"], KernelFitOptions{}.roots);
+  EXPECT_EQ(r["initial"]["roots"], monopole::KernelFitOptions{}.roots);
 }
 
 TEST(ExperimentSchema, EachKindOfInitialGuessResolvesToItsDefaults) {
@@ -83,7 +83,7 @@ TEST(ExperimentSchema, ModulusAndPortalExperimentsResolveToTheirOptionsDefaults)
   target.origin.reset();  // the unit frame has no fractal origin
   EXPECT_EQ(r["target"], target.ToJson());
   EXPECT_EQ(r["modulus"], ModulusStageOptions().ToJson());
-  EXPECT_EQ(r["modulus"]["output"]["resolution"], MeshingOptions{}.resolution);
+  EXPECT_EQ(r["modulus"]["output"]["resolution"], mesh::MeshingOptions{}.resolution);
   EXPECT_EQ(r["pictures"], PicturesOptions().ToJson());
   r = Resolve({{"method", "portal"}, {"portal", {{"koch", true}}}});
   PortalStageOptions portal;
@@ -152,7 +152,7 @@ void ExpectHelpShowsDefaults(const std::vector<std::string>& command, const O& o
 TEST(CommandLineSchema, OptimizeHelpShowsTheOptimizerDefaults) {
   const auto r = testing::RunQuijiboArgs({"optimize", "--help"});
   ASSERT_EQ(r.code, 0) << r.err;
-  const json defaults = OptimizeOptions().ToJson();
+  const json defaults = optim::OptimizeOptions().ToJson();
   const std::vector<std::pair<std::string, std::string>> flags = {
       {"--alpha", "alpha"},           {"--memory", "memory"},
       {"--absolute-every", "absolute_every"}, {"--checkpoint-every", "checkpoint_every"},

@@ -14,6 +14,17 @@
 namespace quijibo::pipeline {
 namespace {
 
+using mesh::FrameScale;
+using mesh::NormalizationFor;
+using mesh::ParseFrameScale;
+using mesh::FrameScaleName;
+using mesh::PlaceOriginInside;
+using mesh::ScaleToTrap;
+using mesh::ToFractalFrame;
+using mesh::TriangleMesh;
+using mesh::UnsignedDistance;
+using mesh::WriteObj;
+
 // A flat ellipsoid: semi-axes 1, 1, 0.1 (user units), a plate 20 times thinner than it is wide.
 TriangleMesh Plate() {
   TriangleMesh m = testing::Icosphere(4);
