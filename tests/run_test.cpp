@@ -170,6 +170,10 @@ TEST(RunTest, BadExperimentsGiveOneClearLineAndNoResultsFolder) {
        "/optimizer/precision"},
       {"method", "{" + torus + R"(, "method": "quijbo"})", "/method"},
       {"padding", R"({"target": {"analytic": "torus", "padding": 0.7}})", "/target/padding"},
+      {"frame-scale-analytic", R"({"target": {"analytic": "torus", "frame_scale": "trap"}})",
+       "/target/frame_scale: applies only to QUIJIBO mesh targets with \"origin\": \"inside\""},
+      {"frame-scale-center", R"({"target": {"mesh": "a.obj", "origin": "center", "frame_scale": "trap"}})",
+       "/target/frame_scale: applies only"},
   };
   for (const BadCase& c : cases) {
     const std::string exp = dir + "/" + c.name + ".json", out = dir + "/out-" + c.name;

@@ -106,6 +106,13 @@ TargetOptions TargetOptions::FromJson(const JsonReader& r, const std::string& p,
     r.fail(p + "/box", "only mesh targets choose their box (analytic targets use the reference box)");
   if ((kind != "mesh" || !o.origin) && r.has(p + "/origin"))
     r.fail(p + "/origin", "only QUIJIBO mesh targets place the fractal origin");
+  if (r.has(p + "/frame_scale")) {
+    const bool inside = r.has(p + "/origin") ? r.at(p + "/origin") == "inside"
+                                             : o.origin == mesh::OriginPlacement::kInside;
+    if (kind != "mesh" || !o.origin || !inside)
+      r.fail(p + "/frame_scale", "applies only to QUIJIBO mesh targets with \"origin\": \"inside\" (the trap is "
+                                 "the ball about an origin inside the shape)");
+  }
   Settings().Read(r, p, base, o, {"kind"});
   if (kind == "mesh" && !IsMeshPath(o.mesh))
     r.fail(p + "/mesh", "expected a .obj, .ply, .stl or .off file, found " + o.mesh);
