@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "quijibo/hash.h"
 #include "quijibo/io.h"
 
 namespace quijibo::pipeline {
@@ -12,25 +13,6 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
-
-// FNV-1a, 64 bit: stable across runs, compilers and machines (std::hash is not).
-struct Fnv1a {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  void add(const std::string& bytes) {
-    for (unsigned char c : bytes) {
-      h ^= c;
-      h *= 0x100000001b3ull;
-    }
-    // A separator, so ("ab", "c") and ("a", "bc") differ.
-    h ^= 0xff;
-    h *= 0x100000001b3ull;
-  }
-  std::string hex() const {
-    char buf[17];
-    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-    return buf;
-  }
-};
 
 double Since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
