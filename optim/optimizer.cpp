@@ -169,7 +169,7 @@ class LogLinearObjective : public Objective<double> {
 // energy is compared with the dense one.
 class BandObjective : public Objective<double> {
  public:
-  explicit BandObjective(LogLinearEnergy* e) : dense_(e), band_(e) {}
+  BandObjective(LogLinearEnergy* e, std::shared_ptr<const BandBlocks> blocks) : dense_(e), band_(e, std::move(blocks)) {}
   Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode) override { return band_.Evaluate(x, mode); }
   void BeginVariablePass(const Eigen::VectorXd& x) override { dense_->BeginVariablePass(x); }
   void SetWeights(const std::vector<double>& w, double eta) override { dense_->SetWeights(w, eta); }
@@ -183,7 +183,8 @@ class BandObjective : public Objective<double> {
     return {{"cells", s.cells}, {"band_cells", s.band_cells}, {"mean_fraction", s.mean_fraction()},
             {"work_fraction", s.work_fraction()}, {"max_cells", s.max_exact}, {"evaluations", s.evaluations},
             {"anchors", s.anchors}, {"anchors_reach", s.anchors_reach}, {"anchors_work", s.anchors_work},
-            {"far_sweeps", s.far},
+            {"far_sweeps", s.far}, {"block_sweeps", s.block_sweeps}, {"blocks", s.blocks},
+            {"saturated_blocks", s.saturated_blocks}, {"cached_row_bytes", dense_->cached_row_bytes()},
             {"dense_fallbacks", s.dense_fallbacks}, {"energy_dense", dense},
             {"energy_error", std::fabs(energy - dense) / std::max(1e-300, std::fabs(dense))}};
   }
@@ -302,7 +303,8 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       if (loglinear) {
         if (!share) level_energy = std::make_unique<LogLinearEnergy>(map, grid, o.energy, o.loglinear());
         LogLinearEnergy* e = share ? &weights.absolute_evaluator() : level_energy.get();
-        if (evaluator == "band") objective = std::make_unique<BandObjective>(e);
+        if (evaluator == "band")
+          objective = std::make_unique<BandObjective>(e, share ? weights.absolute_blocks() : nullptr);
         else objective = std::make_unique<LogLinearObjective>(e);
       }
     }

@@ -10,7 +10,9 @@ PassWeights::PassWeights(const ScalarGrid& sdf, WeightField field, const Rationa
       field_(field),
       finest_w_(ComputeWeights(sdf, field)),
       finest_(MakeEnergyGrid(sdf, finest_w_, field, 0, LevelWeights::kSampleFinest, 0.0)),
-      absolute_(map, finest_, energy, loglinear) {}
+      absolute_(map, finest_, energy, loglinear) {
+  if (absolute_.storage() == LogLinearOptions::Storage::kOnTheFly) absolute_band_ = std::make_unique<BandEnergy>(&absolute_);
+}
 
 EnergyGrid PassWeights::Level(int resolution, LevelWeights level_weights) const {
   return MakeEnergyGrid(sdf_, finest_w_, field_, resolution, level_weights, 0.0);
@@ -31,7 +33,8 @@ void PassWeights::BeginPass(PassKind kind, int resolution, const EnergyGrid& lev
 
 double PassWeights::Absolute(const Eigen::VectorXd& x) {
   absolute_.SetWeights(finest_.weight, finest_.eta);
-  const double psi = absolute_.Evaluate(x, EnergyMode::kFull, false).energy;
+  const double psi = absolute_band_ ? absolute_band_->Evaluate(x, EnergyMode::kFull, false).energy
+                                    : absolute_.Evaluate(x, EnergyMode::kFull, false).energy;
   if (shared_ && pass_) set_(pass_->weight, pass_->eta);
   return psi;
 }

@@ -2,7 +2,9 @@
 // level's weights, an R pass the reweighted field of its start map (reweight.h); the absolute
 // energy is psi on the finest grid with the original weights, by the exact log-linear evaluator,
 // which the finest level's log-linear passes share: after an absolute evaluation the pass's
-// weights are given back. Internal to optim/.
+// weights are given back. When the finest grid's log-distances are not stored (on-the-fly: grids
+// beyond ~100^3), the absolute energy goes through a narrow band over blocks (band_energy.h): exact,
+// without a dense sweep. Internal to optim/.
 #pragma once
 
 #include <Eigen/Core>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include "optim/schedule.h"
+#include "quijibo/band_energy.h"
 #include "quijibo/energy.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/rational_map.h"
@@ -26,6 +29,10 @@ class PassWeights {
   const EnergyGrid& finest() const { return finest_; }
   const std::vector<double>& finest_weight() const { return finest_w_; }
   LogLinearEnergy& absolute_evaluator() { return absolute_; }
+  // The absolute evaluator's band blocks (null when its matrix is stored), for a band that shares it.
+  std::shared_ptr<const BandBlocks> absolute_blocks() const {
+    return absolute_band_ ? absolute_band_->blocks() : nullptr;
+  }
   // A level's grid and weights (coarse levels sample or recompute the finest W).
   EnergyGrid Level(int resolution, LevelWeights level_weights) const;
 
@@ -47,6 +54,7 @@ class PassWeights {
   std::vector<double> finest_w_;
   EnergyGrid finest_;
   LogLinearEnergy absolute_;
+  std::unique_ptr<BandEnergy> absolute_band_;
   EnergyGrid reweighted_;
   const EnergyGrid* pass_ = nullptr;
   SetWeights set_;

@@ -14,12 +14,97 @@ using loglinear::Fixed;
 namespace {
 constexpr std::int32_t kOutside = std::numeric_limits<std::int32_t>::max();
 constexpr double kUnit = std::numeric_limits<double>::epsilon() / 2;  // u
+// Absolute room for the rounding of a computed log-distance (a few u of |D| <= ~50) in e_j and
+// the block norm: far above it, far below any slack that matters.
+constexpr double kLogRoom = 1e-12;
 }  // namespace
 
-BandEnergy::BandEnergy(const LogLinearEnergy* dense) : dense_(dense) {
+std::size_t BandBlocks::bytes() const {
+  return (offsets.size() + actives.size()) * sizeof(std::int64_t) +
+         (log_distance.size() + norm.size() + centre.size() + radius.size()) * sizeof(double) +
+         (reach.size() + curvature.size()) * sizeof(float);
+}
+
+std::shared_ptr<const BandBlocks> BandBlocks::Build(const LogLinearEnergy& dense, int side) {
+  if (side < 1) throw Error("band: block side must be >= 1");
+  auto blocks = std::make_shared<BandBlocks>();
+  const GridFrame& f = dense.frame();
+  const int r = dense.root_count();
+  blocks->roots = r;
+  const int n[3] = {(f.dims[0] + side - 1) / side, (f.dims[1] + side - 1) / side, (f.dims[2] + side - 1) / side};
+  const std::int64_t nb = std::int64_t(n[0]) * n[1] * n[2];
+  const std::int64_t m = dense.active_count();
+  auto block_of = [&](std::int64_t cell) {
+    const std::int64_t i = cell % f.dims[0], j = (cell / f.dims[0]) % f.dims[1], k = cell / (std::int64_t(f.dims[0]) * f.dims[1]);
+    return i / side + n[0] * (j / side + std::int64_t(n[1]) * (k / side));
+  };
+  // Counting sort of the active cells by block; ascending within a block since a ascends.
+  blocks->offsets.assign(std::size_t(nb + 1), 0);
+  for (std::int64_t a = 0; a < m; ++a) ++blocks->offsets[std::size_t(block_of(dense.cell_of(a)) + 1)];
+  for (std::int64_t b = 0; b < nb; ++b) blocks->offsets[std::size_t(b + 1)] += blocks->offsets[std::size_t(b)];
+  blocks->actives.resize(std::size_t(m));
+  {
+    std::vector<std::int64_t> next(blocks->offsets.begin(), blocks->offsets.end() - 1);
+    for (std::int64_t a = 0; a < m; ++a) blocks->actives[std::size_t(next[std::size_t(block_of(dense.cell_of(a)))]++)] = a;
+  }
+  blocks->log_distance.resize(std::size_t(nb) * r);
+  blocks->reach.resize(std::size_t(nb) * r);
+  blocks->curvature.resize(std::size_t(nb) * r);
+  blocks->norm.resize(std::size_t(nb));
+  blocks->centre.resize(std::size_t(nb) * 3);
+  blocks->radius.resize(std::size_t(nb));
+  const float inf = std::numeric_limits<float>::infinity();
+  auto up = [&](double v) { return std::nextafter(float(v), inf); };  // a float bound >= v
+#pragma omp parallel for schedule(dynamic, 16)
+  for (std::int64_t b = 0; b < nb; ++b) {
+    const int bi = int(b % n[0]), bj = int((b / n[0]) % n[1]), bk = int(b / (std::int64_t(n[0]) * n[1]));
+    // Index ranges [lo, hi] of the block's cells; the centre of their centres and the reach h.
+    const int lo[3] = {bi * side, bj * side, bk * side};
+    const int hi[3] = {std::min(f.dims[0], lo[0] + side) - 1, std::min(f.dims[1], lo[1] + side) - 1,
+                       std::min(f.dims[2], lo[2] + side) - 1};
+    Vec3 p;
+    double h2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      p[k] = f.min_corner[k] + f.spacing * (0.5 * (lo[k] + hi[k]) + 0.5);
+      const double half = 0.5 * f.spacing * (hi[k] - lo[k]);
+      h2 += half * half;
+    }
+    // Rounded up: every cell centre is within h of p.
+    const double h = std::sqrt(h2) * (1 + 1e-12) + 1e-300;
+    for (int k = 0; k < 3; ++k) blocks->centre[std::size_t(b * 3 + k)] = p[k];
+    blocks->radius[std::size_t(b)] = h;
+    double* D = blocks->log_distance.data() + b * r;
+    float* e = blocks->reach.data() + b * r;
+    float* q = blocks->curvature.data() + b * r;
+    double n2 = 1.0;
+    for (int j = 0; j < r; ++j) {
+      D[j] = dense.LogDistance(p, j);
+      const double d = std::exp(D[j]) * (1 - 1e-12);  // rounded down
+      if (!(d > h)) {
+        e[j] = q[j] = inf;
+        n2 = std::numeric_limits<double>::infinity();
+        continue;
+      }
+      e[j] = up(-std::log1p(-h / d) * (1 + 1e-12) + kLogRoom);
+      q[j] = up(h * h / (2 * (d - h) * (d - h)) * (1 + 1e-12) + kLogRoom);
+      const double M = std::max(std::fabs(std::log(d - h)), std::fabs(std::log(d + h))) + kLogRoom;
+      n2 += M * M;
+    }
+    blocks->norm[std::size_t(b)] = std::sqrt(n2) * (1 + 1e-12);
+  }
+  return blocks;
+}
+
+BandEnergy::BandEnergy(const LogLinearEnergy* dense, std::shared_ptr<const BandBlocks> blocks) : dense_(dense) {
   if (!dense) throw Error("band: no dense evaluator");
   if (dense->active_count() >= kOutside) throw Error("band: too many cells");
   stats_.cells = dense->active_count();
+  if (dense->storage() == LogLinearOptions::Storage::kOnTheFly) {
+    blocks_ = blocks ? std::move(blocks) : BandBlocks::Build(*dense);
+    if (blocks_->roots != dense->root_count() || std::int64_t(blocks_->actives.size()) != dense->active_count())
+      throw Error("band: the blocks belong to another evaluator");
+    stats_.blocks = blocks_->count();
+  }
 }
 
 void BandEnergy::ResetStats() {
@@ -27,6 +112,7 @@ void BandEnergy::ResetStats() {
   stats_ = BandStats{};
   stats_.cells = dense_->active_count();
   stats_.band_cells = band;
+  stats_.blocks = blocks_ ? blocks_->count() : 0;
 }
 
 double BandEnergy::Displacement(const Eigen::VectorXd& x, const double* coeff) const {
@@ -53,19 +139,218 @@ double BandEnergy::RoundingBound(const Eigen::VectorXd& x, const double* coeff) 
   return 4.0 * terms * kUnit * std::sqrt(v) * norm_max_;
 }
 
+void BandEnergy::Group(const std::vector<std::int64_t>& cells, std::vector<std::int64_t>* ids,
+                       std::vector<std::int64_t>* offsets) {
+  ids->clear();
+  offsets->clear();
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const std::int64_t b = cells[i] / kEnergyBlock;
+    if (ids->empty() || ids->back() != b) {
+      ids->push_back(b);
+      offsets->push_back(std::int64_t(i));
+    }
+  }
+  offsets->push_back(std::int64_t(cells.size()));
+}
+
+void BandEnergy::SumCells(const Eigen::VectorXd& x, const double* coeff, bool variable, bool with_gradient,
+                          const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& ids,
+                          const std::vector<std::int64_t>& offsets, std::int32_t below, bool capture,
+                          Fixed* energy_out, std::vector<double>* total, std::int64_t* nonfinite_out) {
+  const int r = dense_->root_count();
+  const double lnC = x[0], tau = x[1], beta = x[2], alpha = dense_->alpha(), scale = dense_->energy_scale();
+  const int nb_vals = 3 + (with_gradient && !variable ? r : 0);
+  const std::int64_t nblocks = std::int64_t(ids.size());
+  std::vector<double> partial(std::size_t(nblocks * nb_vals), 0.0);
+  std::vector<Fixed> block_energy(std::size_t(nblocks), 0);
+  std::vector<std::int64_t> block_nonfinite(std::size_t(nblocks), 0);
+#pragma omp parallel if (nblocks > 1)
+  {
+    std::vector<double> buffer(static_cast<std::size_t>(r));
+#pragma omp for schedule(dynamic, 1)
+    for (std::int64_t bi = 0; bi < nblocks; ++bi) {
+      double* out = partial.data() + bi * nb_vals;
+      Fixed energy = 0;
+      std::int64_t nonfinite = 0;
+      for (std::int64_t i = offsets[std::size_t(bi)]; i < offsets[std::size_t(bi + 1)]; ++i) {
+        const std::int64_t a = cells[std::size_t(i)];
+        if (below >= 0 && rank_[std::size_t(a)] >= below) continue;  // provably saturated: in the constant
+        const double* row = nullptr;
+        double L;
+        if (variable) {
+          L = loglinear::VariableL(lnC, tau, beta, dense_->s_top(a), dense_->s_bottom(a));
+        } else {
+          row = dense_->RowOf(a, buffer.data());
+          L = lnC + loglinear::Dot(coeff, row, r);
+          if (capture) {
+            double n2 = 1.0;
+#pragma omp simd reduction(+ : n2)
+            for (int j = 0; j < r; ++j) n2 += row[j] * row[j];
+            row_norm_[std::size_t(a)] = std::sqrt(n2);
+          }
+        }
+        if (capture) scratch_[std::size_t(a)] = L;
+        const double W = dense_->weight(a);
+        double g;
+        const double th = loglinear::Tanh(alpha, L, W, &g);
+        bool bad = false;
+        energy += loglinear::EnergyFixed(th, W, scale, &bad);
+        nonfinite += bad;
+        if (!with_gradient || g == 0.0) continue;
+        if (variable) loglinear::AccumulateVariable(g, dense_->s_top(a), dense_->s_bottom(a), out);
+        else {
+          out[0] += g;
+          loglinear::Axpy(g, row, out + 3, r);
+        }
+      }
+      block_energy[std::size_t(bi)] = energy;
+      block_nonfinite[std::size_t(bi)] = nonfinite;
+    }
+  }
+  // Blocks without evaluated cells add exact zeros in the dense sums: summing the others in block
+  // order gives the dense totals.
+  total->assign(std::size_t(nb_vals), 0.0);
+  for (std::int64_t bi = 0; bi < nblocks; ++bi) {
+    for (int j = 0; j < nb_vals; ++j) (*total)[std::size_t(j)] += partial[std::size_t(bi * nb_vals + j)];
+    *energy_out += block_energy[std::size_t(bi)];
+    *nonfinite_out += block_nonfinite[std::size_t(bi)];
+  }
+}
+
 Evaluation<double> BandEnergy::Sweep(const Eigen::VectorXd& x, bool variable, bool with_gradient) {
   const std::int64_t m = dense_->active_count();
   scratch_.resize(std::size_t(m));
+  if (blocks_ && !variable) return BlockSweep(x, with_gradient);
+  pending_blocked_ = false;
+  stats_.sweep_cells += m;
   const bool need_norms = !variable && row_norm_.empty();
   if (need_norms) row_norm_.resize(std::size_t(m));
   return dense_->EvaluateCapturing(x, variable ? EnergyMode::kVariable : EnergyMode::kFull, with_gradient,
                                    scratch_.data(), need_norms ? row_norm_.data() : nullptr);
 }
 
+void BandEnergy::UpdateBlockConstants() {
+  if (block_weights_version_ == dense_->weights_version()) return;
+  const std::int64_t nb = blocks_->count();
+  const double scale = dense_->energy_scale();
+  block_energy_plus_.assign(std::size_t(nb), 0);
+  block_energy_minus_.assign(std::size_t(nb), 0);
+#pragma omp parallel for schedule(dynamic, 64)
+  for (std::int64_t b = 0; b < nb; ++b) {
+    Fixed plus = 0, minus = 0;
+    for (std::int64_t i = blocks_->offsets[std::size_t(b)]; i < blocks_->offsets[std::size_t(b + 1)]; ++i) {
+      const double W = dense_->weight(blocks_->actives[std::size_t(i)]);
+      bool bad = false;
+      plus += loglinear::EnergyFixed(1.0, W, scale, &bad);
+      minus += loglinear::EnergyFixed(-1.0, W, scale, &bad);
+    }
+    block_energy_plus_[std::size_t(b)] = plus;
+    block_energy_minus_[std::size_t(b)] = minus;
+  }
+  block_weights_version_ = dense_->weights_version();
+}
+
+Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gradient) {
+  const std::int64_t m = dense_->active_count();
+  const std::int64_t nb = blocks_->count();
+  const int r = dense_->root_count();
+  const double l_sat = kBandSaturation / dense_->alpha();
+  std::vector<double> coeff(static_cast<std::size_t>(r));
+  dense_->Coefficients(x, coeff.data());
+  const std::vector<Vec4>& roots = dense_->roots();
+  const double slice = dense_->slice();
+  pending_sign_.assign(std::size_t(nb), 0);
+  pending_radius_.assign(std::size_t(nb), 0.0);
+  double norm_max = 0;
+#pragma omp parallel for schedule(static) reduction(max : norm_max)
+  for (std::int64_t b = 0; b < nb; ++b) {
+    const double N = blocks_->norm[std::size_t(b)];
+    if (!std::isfinite(N)) continue;
+    const double* D = blocks_->log_distance.data() + b * r;
+    const float* e = blocks_->reach.data() + b * r;
+    const float* q = blocks_->curvature.data() + b * r;
+    const double px = blocks_->centre[std::size_t(b * 3)], py = blocks_->centre[std::size_t(b * 3 + 1)],
+                 pz = blocks_->centre[std::size_t(b * 3 + 2)], h = blocks_->radius[std::size_t(b)];
+    double L = x[0], E1 = 0, Q = 0, gx = 0, gy = 0, gz = 0, mag = std::fabs(x[0]);
+    for (int j = 0; j < r; ++j) {
+      const double c = coeff[std::size_t(j)], ac = std::fabs(c);
+      L += c * D[j];
+      E1 += ac * e[j];
+      Q += ac * q[j];
+      mag += ac * (std::fabs(D[j]) + e[j]);
+      // grad D_pj = (p - root_j) / |p - root_j|^2, in the slice's three directions.
+      const Vec4& t = roots[std::size_t(j)];
+      const double ax = px - t[0], ay = py - t[1], az = pz - t[2], aw = slice - t[3];
+      const double s = c / (ax * ax + ay * ay + az * az + aw * aw);
+      gx += s * ax;
+      gy += s * ay;
+      gz += s * az;
+    }
+    const double E = std::min(E1, h * std::sqrt(gx * gx + gy * gy + gz * gz) + Q);
+    // The rounding of L_p, of E and of the cells' own L (sums of R+1 terms of at most this
+    // magnitude; |grad D_pj| h <= e_j), with room.
+    const double slack = std::fabs(L) - E * (1 + 8.0 * (r + 2) * kUnit) - l_sat - 16.0 * (r + 2) * kUnit * mag;
+    if (!(slack > 0)) continue;
+    pending_sign_[std::size_t(b)] = L > 0 ? 1 : -1;
+    pending_radius_[std::size_t(b)] = slack / N;
+    norm_max = std::max(norm_max, N);
+  }
+  pending_exact_.clear();
+  long long saturated = 0;
+  for (std::int64_t b = 0; b < nb; ++b) {
+    if (pending_sign_[std::size_t(b)] != 0) {
+      ++saturated;
+      continue;
+    }
+    pending_exact_.insert(pending_exact_.end(), blocks_->actives.begin() + blocks_->offsets[std::size_t(b)],
+                          blocks_->actives.begin() + blocks_->offsets[std::size_t(b + 1)]);
+  }
+  std::sort(pending_exact_.begin(), pending_exact_.end());
+  stats_.saturated_blocks = saturated;
+  ++stats_.block_sweeps;
+  stats_.sweep_cells += std::int64_t(pending_exact_.size()) + 2 * nb;
+
+  dense_->CacheRows(pending_exact_);
+  row_norm_.resize(std::size_t(m));
+  std::vector<std::int64_t> ids, offsets;
+  Group(pending_exact_, &ids, &offsets);
+  Fixed energy = 0;
+  std::vector<double> total;
+  std::int64_t nonfinite = 0;
+  SumCells(x, coeff.data(), false, with_gradient, pending_exact_, ids, offsets, -1, true, &energy, &total,
+           &nonfinite);
+  for (std::int64_t a : pending_exact_) norm_max = std::max(norm_max, row_norm_[std::size_t(a)]);
+  // The saturated blocks' cells: -+W each, exactly as the dense evaluator's terms.
+  UpdateBlockConstants();
+  for (std::int64_t b = 0; b < nb; ++b) {
+    const signed char s = pending_sign_[std::size_t(b)];
+    if (s > 0) energy += block_energy_plus_[std::size_t(b)];
+    else if (s < 0) energy += block_energy_minus_[std::size_t(b)];
+  }
+  pending_norm_max_ = norm_max;
+  pending_blocked_ = true;
+  // The proof also needs the cells' rounding at x below 0.9 / alpha (as in Evaluate).
+  const double saved_norm_max = norm_max_;
+  const bool saved_variable = anchor_variable_;
+  norm_max_ = norm_max;
+  anchor_variable_ = false;
+  const double rounding = RoundingBound(x, coeff.data());
+  norm_max_ = saved_norm_max;
+  anchor_variable_ = saved_variable;
+  if (rounding > 0.9 / dense_->alpha()) {
+    pending_blocked_ = false;
+    pending_exact_.clear();
+    ++stats_.dense_fallbacks;
+    return dense_->Evaluate(x, EnergyMode::kFull, with_gradient);
+  }
+  return dense_->Assemble(x, false, with_gradient, energy, total.data(), nonfinite);
+}
+
 void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
   const std::int64_t m = dense_->active_count();
   const int r = dense_->root_count();
   anchor_variable_ = variable;
+  anchor_blocked_ = !variable && pending_blocked_;
   variable_version_ = dense_->variable_version();
   anchor_energy_ = energy;
   anchor_weights_version_ = dense_->weights_version();
@@ -73,26 +358,34 @@ void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
   coeff0_.resize(static_cast<std::size_t>(r));
   dense_->Coefficients(x, coeff0_.data());
   std::swap(L0_, scratch_);
+  L0_.resize(std::size_t(m));
   norm_.resize(std::size_t(m));
-  if (variable) {
-    for (std::int64_t a = 0; a < m; ++a) {
-      const double st = dense_->s_top(a), sb = dense_->s_bottom(a);
-      norm_[a] = std::sqrt(1.0 + st * st + sb * sb);
-    }
+  if (anchor_blocked_) {
+    std::swap(exact_, pending_exact_);
+    std::swap(block_sign_, pending_sign_);
+    norm_max_ = pending_norm_max_;
+    for (std::int64_t a : exact_) norm_[std::size_t(a)] = row_norm_[std::size_t(a)];
   } else {
-    std::copy(row_norm_.begin(), row_norm_.end(), norm_.begin());
+    if (variable) {
+      for (std::int64_t a = 0; a < m; ++a) {
+        const double st = dense_->s_top(a), sb = dense_->s_bottom(a);
+        norm_[a] = std::sqrt(1.0 + st * st + sb * sb);
+      }
+    } else {
+      std::copy(row_norm_.begin(), row_norm_.end(), norm_.begin());
+    }
+    norm_max_ = 0;
+    for (double n : norm_) norm_max_ = std::max(norm_max_, n);
   }
-  norm_max_ = 0;
-  for (double n : norm_) norm_max_ = std::max(norm_max_, n);
 
-  // Band, radii and the sorted list.
+  // Band, radii and the sorted list of items: cells, or whole saturated blocks of a block anchor
+  // (item id -1 - b), each evaluated exactly once d(x) reaches its radius.
   const double l_sat = kBandSaturation / dense_->alpha();
   const double e0 = RoundingBound(x, coeff0_.data());
   rank_.assign(std::size_t(m), kOutside);
   std::vector<std::pair<double, std::int64_t>> items;
-  items.reserve(std::size_t(m));
   band_count_ = 0;
-  for (std::int64_t a = 0; a < m; ++a) {
+  auto classify = [&](std::int64_t a) {
     const double s = std::fabs(L0_[a]) - l_sat - e0;
     if (!(s > 0)) {  // also NaN
       rank_[a] = -1;
@@ -100,55 +393,70 @@ void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
     } else {
       items.emplace_back(s / norm_[a], a);
     }
-  }
-  const std::int64_t n = std::int64_t(items.size());
-  const std::int64_t K = std::min<std::int64_t>(n, std::max<std::int64_t>(band_count_, m / 16));
-  if (K < n) {
-    std::nth_element(items.begin(), items.begin() + K, items.end());
-    list_cap_ = items[std::size_t(K)].first;
-    for (std::int64_t i = K + 1; i < n; ++i) list_cap_ = std::min(list_cap_, items[std::size_t(i)].first);
+  };
+  auto item_cells = [&](std::int64_t id) {
+    return id >= 0 ? std::int64_t(1) : blocks_->offsets[std::size_t(-id)] - blocks_->offsets[std::size_t(-id - 1)];
+  };
+  const std::int64_t budget = std::max<std::int64_t>(band_count_, m / 16);
+  std::int64_t K;
+  if (anchor_blocked_) {
+    items.reserve(exact_.size() + block_sign_.size());
+    for (std::int64_t a : exact_) classify(a);
+    for (std::int64_t bl = 0; bl < blocks_->count(); ++bl)
+      if (block_sign_[std::size_t(bl)] != 0) items.emplace_back(pending_radius_[std::size_t(bl)], -1 - bl);
+    // The smallest radii, up to `budget` cells.
+    std::sort(items.begin(), items.end());
+    std::int64_t cells = 0;
+    K = 0;
+    while (K < std::int64_t(items.size()) && cells + item_cells(items[std::size_t(K)].second) <= budget)
+      cells += item_cells(items[std::size_t(K++)].second);
+    list_cap_ = K < std::int64_t(items.size()) ? items[std::size_t(K)].first : std::numeric_limits<double>::infinity();
   } else {
-    list_cap_ = std::numeric_limits<double>::infinity();
+    items.reserve(std::size_t(m));
+    for (std::int64_t a = 0; a < m; ++a) classify(a);
+    const std::int64_t n = std::int64_t(items.size());
+    K = std::min<std::int64_t>(n, budget);
+    if (K < n) {
+      std::nth_element(items.begin(), items.begin() + K, items.end());
+      list_cap_ = items[std::size_t(K)].first;
+      for (std::int64_t i = K + 1; i < n; ++i) list_cap_ = std::min(list_cap_, items[std::size_t(i)].first);
+    } else {
+      list_cap_ = std::numeric_limits<double>::infinity();
+    }
+    std::sort(items.begin(), items.begin() + K);
   }
-  std::sort(items.begin(), items.begin() + K);
   list_r_.resize(std::size_t(K));
   list_cell_.resize(std::size_t(K));
+  list_cells_prefix_.assign(std::size_t(K) + 1, 0);
   for (std::int64_t i = 0; i < K; ++i) {
     list_r_[i] = items[std::size_t(i)].first;
-    list_cell_[i] = items[std::size_t(i)].second;
-    rank_[std::size_t(list_cell_[i])] = std::int32_t(i);
+    const std::int64_t id = list_cell_[i] = items[std::size_t(i)].second;
+    list_cells_prefix_[std::size_t(i) + 1] = list_cells_prefix_[std::size_t(i)] + item_cells(id);
+    if (id >= 0) {
+      rank_[std::size_t(id)] = std::int32_t(i);
+    } else {
+      for (std::int64_t j = blocks_->offsets[std::size_t(-id - 1)]; j < blocks_->offsets[std::size_t(-id)]; ++j)
+        rank_[std::size_t(blocks_->actives[std::size_t(j)])] = std::int32_t(i);
+    }
   }
 
-  // The candidates in cell order, grouped by the dense evaluator's blocks.
+  // The candidates in cell order, grouped by the dense evaluator's blocks; their rows cached.
   candidates_.clear();
-  block_ids_.clear();
-  block_offsets_.clear();
-  for (std::int64_t a = 0; a < m; ++a) {
-    if (rank_[a] == kOutside) continue;
-    const std::int64_t b = a / kEnergyBlock;
-    if (block_ids_.empty() || block_ids_.back() != b) {
-      block_ids_.push_back(b);
-      block_offsets_.push_back(std::int64_t(candidates_.size()));
-    }
-    candidates_.push_back(a);
+  if (anchor_blocked_) {
+    for (std::int64_t a : exact_)
+      if (rank_[a] != kOutside) candidates_.push_back(a);
+    for (std::int64_t id : list_cell_)
+      if (id < 0)
+        candidates_.insert(candidates_.end(), blocks_->actives.begin() + blocks_->offsets[std::size_t(-id - 1)],
+                           blocks_->actives.begin() + blocks_->offsets[std::size_t(-id)]);
+    std::sort(candidates_.begin(), candidates_.end());
+  } else {
+    for (std::int64_t a = 0; a < m; ++a)
+      if (rank_[a] != kOutside) candidates_.push_back(a);
   }
-  block_offsets_.push_back(std::int64_t(candidates_.size()));
-  // Without a stored matrix, keep the candidates' rows (computing them is the costly part).
-  compact_rows_ = !variable && dense_->storage() != LogLinearOptions::Storage::kDouble;
-  candidate_rows_.clear();
-  if (compact_rows_) {
-    const std::int64_t nc = std::int64_t(candidates_.size());
-    candidate_rows_.resize(std::size_t(nc) * r);
-#pragma omp parallel if (nc > kEnergyBlock)
-    {
-      std::vector<double> buffer(static_cast<std::size_t>(r));
-#pragma omp for schedule(static)
-      for (std::int64_t i = 0; i < nc; ++i) {
-        const double* row = dense_->RowOf(candidates_[i], buffer.data());
-        std::copy(row, row + r, candidate_rows_.begin() + i * r);
-      }
-    }
-  }
+  Group(candidates_, &block_ids_, &block_offsets_);
+  if (!variable) dense_->CacheRows(candidates_);
+  anchor_cost_ = anchor_blocked_ ? std::int64_t(exact_.size()) + 2 * blocks_->count() : m;
   weights_version_ = ~std::uint64_t(0);  // constants follow the new band
   extra_ = 0;
   anchored_ = true;
@@ -163,11 +471,24 @@ void BandEnergy::UpdateConstants() {
     bool bad = false;
     return loglinear::EnergyFixed(L0_[a] > 0 ? 1.0 : -1.0, dense_->weight(a), scale, &bad);
   };
+  auto item_term = [&](std::int64_t id) -> Fixed {
+    if (id >= 0) return term(id);
+    const std::size_t bl = std::size_t(-id - 1);
+    return block_sign_[bl] > 0 ? block_energy_plus_[bl] : block_energy_minus_[bl];
+  };
   const_total_ = 0;
-  for (std::int64_t a = 0; a < m; ++a)
-    if (rank_[a] >= 0) const_total_ += term(a);
+  if (anchor_blocked_) {
+    UpdateBlockConstants();
+    for (std::int64_t bl = 0; bl < blocks_->count(); ++bl)
+      if (block_sign_[std::size_t(bl)] != 0) const_total_ += item_term(-1 - bl);
+    for (std::int64_t a : exact_)
+      if (rank_[a] >= 0) const_total_ += term(a);
+  } else {
+    for (std::int64_t a = 0; a < m; ++a)
+      if (rank_[a] >= 0) const_total_ += term(a);
+  }
   prefix_.assign(list_cell_.size() + 1, 0);
-  for (std::size_t i = 0; i < list_cell_.size(); ++i) prefix_[i + 1] = prefix_[i] + term(list_cell_[i]);
+  for (std::size_t i = 0; i < list_cell_.size(); ++i) prefix_[i + 1] = prefix_[i] + item_term(list_cell_[i]);
   weights_version_ = dense_->weights_version();
 }
 
@@ -178,7 +499,6 @@ Evaluation<double> BandEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mod
   if (variable && !dense_->variable_ready())
     throw Error("energy: a V-pass evaluation needs BeginVariablePass first");
   const int r = dense_->root_count();
-  const std::int64_t m = dense_->active_count();
   std::vector<double> coeff(static_cast<std::size_t>(r));
   dense_->Coefficients(x, coeff.data());
   ++stats_.evaluations;
@@ -186,10 +506,19 @@ Evaluation<double> BandEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mod
     ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return ev;
   };
-  if (!anchored_ || variable != anchor_variable_ || (variable && variable_version_ != dense_->variable_version())) {
+  auto sweep = [&]() {
+    const long long fallbacks = stats_.dense_fallbacks;
     Evaluation<double> ev = Sweep(x, variable, with_gradient);
-    Adopt(x, variable, ev.energy);
-    ++stats_.anchors;
+    return std::make_pair(ev, stats_.dense_fallbacks == fallbacks);  // adoptable
+  };
+  if (!anchored_ || variable != anchor_variable_ || (variable && variable_version_ != dense_->variable_version())) {
+    auto [ev, adoptable] = sweep();
+    if (adoptable) {
+      Adopt(x, variable, ev.energy);
+      ++stats_.anchors;
+    } else {
+      anchored_ = false;
+    }
     return finish(ev);
   }
   if (RoundingBound(x, coeff.data()) > 0.9 / dense_->alpha()) {
@@ -200,75 +529,29 @@ Evaluation<double> BandEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mod
   const double d = Displacement(x, coeff.data());
   const std::int64_t k = std::upper_bound(list_r_.begin(), list_r_.end(), d) - list_r_.begin();
   const bool beyond = k == std::int64_t(list_r_.size()) && d >= list_cap_;
-  if (beyond || extra_ + k > m) {
-    Evaluation<double> ev = Sweep(x, variable, with_gradient);
-    const bool adopt = !beyond || anchor_weights_version_ != dense_->weights_version() || !(ev.energy > anchor_energy_);
+  const std::int64_t k_cells = list_cells_prefix_[std::size_t(k)];
+  if (beyond || extra_ + k_cells > anchor_cost_) {
+    auto [ev, adoptable] = sweep();
+    const bool adopt =
+        adoptable && (!beyond || anchor_weights_version_ != dense_->weights_version() || !(ev.energy > anchor_energy_));
     if (adopt) {
       Adopt(x, variable, ev.energy);
       ++stats_.anchors;
       ++(beyond ? stats_.anchors_reach : stats_.anchors_work);
-    } else {
+    } else if (adoptable) {
       ++stats_.far;
     }
     return finish(ev);
   }
-  extra_ += k;
+  extra_ += k_cells;
   if (weights_version_ != dense_->weights_version()) UpdateConstants();
 
-  const double lnC = x[0], tau = x[1], beta = x[2], alpha = dense_->alpha(), scale = dense_->energy_scale();
-  const int nb_vals = 3 + (with_gradient && !variable ? r : 0);
-  const std::int64_t nblocks = std::int64_t(block_ids_.size());
-  std::vector<double> partial(std::size_t(nblocks * nb_vals), 0.0);
-  std::vector<Fixed> block_energy(std::size_t(nblocks), 0);
-  std::vector<std::int64_t> block_nonfinite(std::size_t(nblocks), 0);
-  const std::int32_t kk = std::int32_t(k);
-#pragma omp parallel if (nblocks > 1)
-  {
-    std::vector<double> buffer(static_cast<std::size_t>(r));
-#pragma omp for schedule(dynamic, 1)
-    for (std::int64_t bi = 0; bi < nblocks; ++bi) {
-      double* out = partial.data() + bi * nb_vals;
-      Fixed energy = 0;
-      std::int64_t nonfinite = 0;
-      for (std::int64_t i = block_offsets_[bi]; i < block_offsets_[bi + 1]; ++i) {
-        const std::int64_t a = candidates_[i];
-        if (rank_[a] >= kk) continue;  // provably saturated: in the constant
-        const double* row = nullptr;
-        double L;
-        if (variable) {
-          L = loglinear::VariableL(lnC, tau, beta, dense_->s_top(a), dense_->s_bottom(a));
-        } else {
-          row = compact_rows_ ? candidate_rows_.data() + i * r : dense_->RowOf(a, buffer.data());
-          L = lnC + loglinear::Dot(coeff.data(), row, r);
-        }
-        const double W = dense_->weight(a);
-        double g;
-        const double th = loglinear::Tanh(alpha, L, W, &g);
-        bool bad = false;
-        energy += loglinear::EnergyFixed(th, W, scale, &bad);
-        nonfinite += bad;
-        if (!with_gradient || g == 0.0) continue;
-        if (variable) loglinear::AccumulateVariable(g, dense_->s_top(a), dense_->s_bottom(a), out);
-        else {
-          out[0] += g;
-          loglinear::Axpy(g, row, out + 3, r);
-        }
-      }
-      block_energy[bi] = energy;
-      block_nonfinite[bi] = nonfinite;
-    }
-  }
-  // Blocks without candidates add exact zeros in the dense sums: summing the others in block order
-  // gives the dense totals.
-  std::vector<double> total(std::size_t(nb_vals), 0.0);
   Fixed energy = const_total_ - prefix_[std::size_t(k)];
+  std::vector<double> total;
   std::int64_t nonfinite = 0;
-  for (std::int64_t bi = 0; bi < nblocks; ++bi) {
-    for (int j = 0; j < nb_vals; ++j) total[j] += partial[std::size_t(bi * nb_vals + j)];
-    energy += block_energy[bi];
-    nonfinite += block_nonfinite[bi];
-  }
-  const long long exact = band_count_ + k;
+  SumCells(x, coeff.data(), variable, with_gradient, candidates_, block_ids_, block_offsets_, std::int32_t(k), false,
+           &energy, &total, &nonfinite);
+  const long long exact = band_count_ + k_cells;
   stats_.exact_cells += exact;
   stats_.max_exact = std::max(stats_.max_exact, exact);
   return finish(dense_->Assemble(x, variable, with_gradient, energy, total.data(), nonfinite));

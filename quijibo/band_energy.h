@@ -26,9 +26,29 @@
 //
 // Rounding: |L computed - L| <= (R+2) u ||v||_2 N_c for a dot product of R+1 terms; the band uses
 // 4 (R+1) u ||v||_2 max_c N_c.
+//
+// Blocks (on-the-fly storage, where a dense sweep costs R logarithms per cell: the levels beyond
+// 97^3). The grid is cut into blocks of kBandBlockSide^3 cells. Take a block with centre p, whose
+// cell centres q = p + delta lie within h of p (delta in the slice), and a root at distance
+// d_j > h from p. Two bounds on how far L moves inside the block:
+//   first order in each root:  |D_qj - D_pj| <= e_j = -log(1 - h/d_j), so
+//                              |L_q - L_p| <= sum_j |coeff_j| e_j;
+//   Taylor with remainder:     the Hessian of log|x| has norm 1/|x|^2, so
+//                              |D_qj - D_pj - grad D_pj . delta| <= q_j = h^2 / (2 (d_j - h)^2) and
+//                              |L_q - L_p| <= h |g| + sum_j |coeff_j| q_j,  g = sum_j coeff_j grad D_pj.
+// The second keeps the cancellation between top and bottom roots (g is L's gradient), the first
+// is tighter right next to a root; the band takes the smaller, E. The whole block is saturated,
+// with the sign of L_p, when |L_p| - E > L_sat (plus the rounding of the sums). Its row norms are
+// bounded by N_B = sqrt(1 + sum_j max(|log(d_j - h)|, |log(d_j + h)|)^2) >= N_c, so it stays
+// saturated while d(x) <= r_B = slack / N_B, like a cell. An anchor then costs one pass over the
+// blocks (~4R operations each) plus the cells of the blocks it could not prove saturated, whose
+// rows the dense evaluator caches (LogLinearEnergy::CacheRows); the list's reach is capped by the
+// smallest r_B. Blocks with a root within h are never saturated; V passes (O(cells) per sweep) do
+// not use blocks.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "quijibo/loglinear_energy.h"
@@ -36,6 +56,25 @@
 namespace quijibo {
 
 inline constexpr double kBandSaturation = 20.0;  // |alpha L| of a saturated cell
+inline constexpr int kBandBlockSide = 4;        // cells per block side (on-the-fly storage)
+
+// The blocks of a dense evaluator's grid and what bounds D inside them (see above). Built once per
+// grid and map; two bands over one evaluator (a level's and the absolute energy's) can share them.
+struct BandBlocks {
+  // Blocks of `side`^3 cells over dense's grid; their active cells and bounds for its roots.
+  static std::shared_ptr<const BandBlocks> Build(const LogLinearEnergy& dense, int side = kBandBlockSide);
+  int roots = 0;
+  std::vector<std::int64_t> offsets;  // block b holds actives[offsets[b] .. offsets[b+1])
+  std::vector<std::int64_t> actives;  // ascending within a block
+  std::vector<double> log_distance;   // D from each block's centre: roots per block
+  std::vector<float> reach;           // e_j, rounded up: roots per block
+  std::vector<float> curvature;       // q_j, rounded up: roots per block
+  std::vector<double> norm;           // N_B; infinite when a root is within the block's reach
+  std::vector<double> centre;         // 3 per block (x, y, z; w is the slice)
+  std::vector<double> radius;         // h per block
+  std::int64_t count() const { return std::int64_t(norm.size()); }
+  std::size_t bytes() const;
+};
 
 struct BandStats {
   long long evaluations = 0;    // all evaluations
@@ -48,13 +87,16 @@ struct BandStats {
   long long max_exact = 0;      // most cells of one band evaluation
   long long band_cells = 0;     // unsaturated cells at the last anchor
   long long cells = 0;          // active cells of the grid
+  long long sweep_cells = 0;    // cells evaluated by sweeps (block sweeps: also 2 per block)
+  long long block_sweeps = 0;   // sweeps over blocks (the others are dense)
+  long long saturated_blocks = 0, blocks = 0;  // at the last block sweep
   long long sweeps() const { return anchors + far + dense_fallbacks; }
   double mean_fraction() const {  // mean share of the grid a band evaluation evaluates
     const long long n = evaluations - sweeps();
     return n > 0 && cells ? double(exact_cells) / double(n) / double(cells) : 0.0;
   }
   double work_fraction() const {  // cells evaluated / (evaluations x cells): dense = 1
-    return evaluations && cells ? (double(exact_cells) + double(sweeps()) * double(cells)) / double(evaluations) / double(cells) : 0.0;
+    return evaluations && cells ? (double(exact_cells) + double(sweep_cells)) / double(evaluations) / double(cells) : 0.0;
   }
 };
 
@@ -62,7 +104,9 @@ class BandEnergy {
  public:
   // Reads the matrix, weights and V-pass sums of `dense`, which must outlive the band. SetWeights
   // and BeginVariablePass go to `dense`; the band notices them.
-  explicit BandEnergy(const LogLinearEnergy* dense);
+  // With on-the-fly storage the band anchors on blocks: `blocks` (BandBlocks::Build(*dense)) or,
+  // if null, its own.
+  explicit BandEnergy(const LogLinearEnergy* dense, std::shared_ptr<const BandBlocks> blocks = nullptr);
 
   // psi and its gradient, equal to dense->Evaluate(x, mode, with_gradient).
   Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode = EnergyMode::kFull,
@@ -71,19 +115,35 @@ class BandEnergy {
   void Invalidate() { anchored_ = false; }
   const BandStats& stats() const { return stats_; }
   void ResetStats();
+  // The blocks (null unless the storage is on-the-fly).
+  const std::shared_ptr<const BandBlocks>& blocks() const { return blocks_; }
 
  private:
-  // A dense evaluation that records L (in scratch_) and, the first time, the row norms.
+  // An evaluation that records L (in scratch_) and the row norms: dense (the norms only the first
+  // time) or, with blocks in full mode, over the blocks and the cells of the unproven ones.
   Evaluation<double> Sweep(const Eigen::VectorXd& x, bool variable, bool with_gradient);
+  Evaluation<double> BlockSweep(const Eigen::VectorXd& x, bool with_gradient);
   // Makes the last sweep's x the anchor.
   void Adopt(const Eigen::VectorXd& x, bool variable, double energy);
   void UpdateConstants();
+  void UpdateBlockConstants();
+  // Groups `cells` (ascending) by the dense evaluator's kEnergyBlock blocks.
+  static void Group(const std::vector<std::int64_t>& cells, std::vector<std::int64_t>* ids,
+                    std::vector<std::int64_t>* offsets);
+  // Evaluates the cells `cells` (grouped as by Group) whose rank_ is below `below` (all if
+  // `below` < 0): their
+  // exact energy sum, gradient totals (as LogLinearEnergy::Assemble takes them) and non-finite
+  // count; records L and, in full mode, the row norm into scratch_ and row_norm_ when `capture`.
+  void SumCells(const Eigen::VectorXd& x, const double* coeff, bool variable, bool with_gradient,
+                const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& ids,
+                const std::vector<std::int64_t>& offsets, std::int32_t below, bool capture,
+                loglinear::Fixed* energy, std::vector<double>* total, std::int64_t* nonfinite);
   // ||v(x) - v(x0)||_2 and ||v(x)||_2 (see above).
   double Displacement(const Eigen::VectorXd& x, const double* coeff) const;
   double RoundingBound(const Eigen::VectorXd& x, const double* coeff) const;
 
   const LogLinearEnergy* dense_;
-  bool anchored_ = false, anchor_variable_ = false, compact_rows_ = false;
+  bool anchored_ = false, anchor_variable_ = false;
   std::uint64_t variable_version_ = 0, weights_version_ = ~std::uint64_t(0);
   std::vector<double> x0_, coeff0_;          // the anchor (V pass: ln C, tau, beta)
   std::vector<double> row_norm_;             // N_c of the full mode (fixed per level)
@@ -93,16 +153,27 @@ class BandEnergy {
   double anchor_energy_ = 0;
   std::uint64_t anchor_weights_version_ = 0;
   std::vector<std::int32_t> rank_;           // -1: band; position in the list; INT32_MAX: neither
-  std::vector<double> list_r_;               // radii r_c of the list, ascending
-  std::vector<std::int64_t> list_cell_;      // the list's cells
+  std::vector<double> list_r_;               // radii of the list's items, ascending
+  std::vector<std::int64_t> list_cell_;      // the list's items: a cell, or -1 - b for block b
+  std::vector<std::int64_t> list_cells_prefix_;  // cells in the first k items
   double list_cap_ = 0;                      // every cell beyond the list has r_c >= list_cap_
   std::vector<std::int64_t> candidates_;     // band and list cells, ascending
   std::vector<std::int64_t> block_ids_, block_offsets_;  // kEnergyBlock blocks holding candidates
-  std::vector<double> candidate_rows_;       // their D rows when the matrix is not stored
   loglinear::Fixed const_total_ = 0;         // energy of all saturated (non-band) cells
-  std::vector<loglinear::Fixed> prefix_;     // energy of the first k list cells
+  std::vector<loglinear::Fixed> prefix_;     // energy of the first k list items
   long long extra_ = 0;                      // list cells evaluated since the anchor
+  long long anchor_cost_ = 0;                // cells an anchor evaluates (ski rental)
   std::int64_t band_count_ = 0;
+  // Blocks: shared geometry; per block the sign of a saturated block (0: its cells are exact)
+  // and its radius, at the anchor and at the last block sweep (pending until adopted).
+  std::shared_ptr<const BandBlocks> blocks_;
+  std::vector<signed char> block_sign_, pending_sign_;
+  std::vector<double> pending_radius_;        // r_B of the saturated blocks (kept by Adopt)
+  double pending_norm_max_ = 0;
+  bool anchor_blocked_ = false, pending_blocked_ = false;
+  std::vector<std::int64_t> exact_, pending_exact_;  // cells of unproven blocks, ascending
+  std::vector<loglinear::Fixed> block_energy_plus_, block_energy_minus_;  // sum of a block's terms at th = +-1
+  std::uint64_t block_weights_version_ = ~std::uint64_t(0);
   BandStats stats_;
 };
 

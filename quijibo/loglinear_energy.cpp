@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -105,6 +106,7 @@ LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
   UpdateScale();
   const std::int64_t m = std::int64_t(cells_.size());
   const int r = root_count();
+  cache_budget_bytes_ = loglinear.memory_budget_bytes / 4;
   if (storage_ == Storage::kAuto)
     storage_ = double(m) * r * sizeof(double) <= loglinear.memory_budget_bytes ? Storage::kDouble
                                                                                 : Storage::kOnTheFly;
@@ -132,13 +134,52 @@ std::size_t LogLinearEnergy::matrix_bytes() const {
   return d_double_.size() * sizeof(double) + d_float_.size() * sizeof(float);
 }
 
+double LogLinearEnergy::LogDistance(const Vec3& p, int j) const {
+  const Vec4& t = roots_[std::size_t(j)];
+  const double a = p[0] - t[0], b = p[1] - t[1], c = p[2] - t[2], d = slice_ - t[3];
+  return 0.5 * std::log(a * a + b * b + c * c + d * d);
+}
+
 void LogLinearEnergy::Row(std::int64_t active, double* out) const {
   const Vec3 p = frame_.cell_center(cells_[std::size_t(active)]);
   const int r = root_count();
-  for (int j = 0; j < r; ++j) {
-    const Vec4& t = roots_[j];
-    const double a = p[0] - t[0], b = p[1] - t[1], c = p[2] - t[2], d = slice_ - t[3];
-    out[j] = 0.5 * std::log(a * a + b * b + c * c + d * d);
+  for (int j = 0; j < r; ++j) out[j] = LogDistance(p, j);
+}
+
+void LogLinearEnergy::CacheRows(const std::vector<std::int64_t>& actives) const {
+  if (storage_ != Storage::kOnTheFly) return;
+  const int r = root_count();
+  const std::size_t row_bytes = std::size_t(r) * sizeof(double);
+  if (row_slot_.empty()) row_slot_.assign(cells_.size(), -1);
+  std::vector<std::int64_t> missing;
+  for (std::int64_t a : actives)
+    if (row_slot_[std::size_t(a)] < 0) missing.push_back(a);
+  std::size_t rows = row_cache_.size() / std::size_t(r);
+  if (double(rows + missing.size()) * double(row_bytes) > cache_budget_bytes_) {
+    std::fill(row_slot_.begin(), row_slot_.end(), -1);
+    row_cache_.clear();
+    row_cache_.shrink_to_fit();
+    rows = 0;
+    missing = actives;
+    std::sort(missing.begin(), missing.end());
+    missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+    if (double(missing.size()) * double(row_bytes) > cache_budget_bytes_ ||
+        missing.size() >= std::size_t(std::numeric_limits<std::int32_t>::max()))
+      return;
+  }
+  if (missing.empty()) return;
+  // Duplicates in `actives` get one slot.
+  std::int64_t n = 0;
+  for (std::int64_t a : missing)
+    if (row_slot_[std::size_t(a)] < 0) {
+      row_slot_[std::size_t(a)] = std::int32_t(rows + std::size_t(n));
+      missing[std::size_t(n++)] = a;
+    }
+  row_cache_.resize((rows + std::size_t(n)) * std::size_t(r));
+#pragma omp parallel for schedule(static) if (n > kEnergyBlock)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const std::int64_t a = missing[std::size_t(i)];
+    Row(a, row_cache_.data() + std::size_t(row_slot_[std::size_t(a)]) * std::size_t(r));
   }
 }
 
@@ -168,9 +209,13 @@ void LogLinearEnergy::SetWeights(const std::vector<double>& grid_weight, double 
 const double* LogLinearEnergy::RowOf(std::int64_t a, double* buffer) const {
   const int r = root_count();
   if (storage_ == Storage::kDouble) return d_double_.data() + std::size_t(a) * r;
-  if (storage_ == Storage::kFloat)
+  if (storage_ == Storage::kFloat) {
     for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
-  else Row(a, buffer);
+  } else {
+    if (!row_slot_.empty() && row_slot_[std::size_t(a)] >= 0)
+      return row_cache_.data() + std::size_t(row_slot_[std::size_t(a)]) * std::size_t(r);
+    Row(a, buffer);
+  }
   return buffer;
 }
 

@@ -16,7 +16,8 @@
 // Storage of D, chosen by measurement (docs/benchmarks.md):
 //   kDouble   precomputed, 8 bytes per cell and root (97^3 x 331: 2.4 GB), exact
 //   kFloat    precomputed, 4 bytes; ~1e-7 relative error in D (not exact, opt-in)
-//   kOnTheFly recomputed at every evaluation, no memory, ~5x slower
+//   kOnTheFly recomputed at every evaluation, ~5x slower; the narrow band keeps the rows of the
+//             cells near the surface (CacheRows, within a quarter of the memory budget)
 //   kAuto     kDouble if it fits in memory_budget_bytes, else kOnTheFly
 #pragma once
 
@@ -75,8 +76,21 @@ class LogLinearEnergy {
   double s_bottom(std::int64_t a) const { return s_bottom_[std::size_t(a)]; }
   double alpha() const { return options_.alpha; }
   double energy_scale() const { return energy_scale_; }
-  // The D row of active cell a: a pointer into the matrix, or `buffer` (root_count() entries) filled.
+  // The D row of active cell a: a pointer into the matrix or the row cache, or `buffer`
+  // (root_count() entries) filled.
   const double* RowOf(std::int64_t a, double* buffer) const;
+  // On-the-fly storage: computes and keeps the rows of the active cells `actives`, so that RowOf
+  // returns them without logarithms. The cache holds at most a quarter of the memory budget; a call
+  // that would pass it starts the cache afresh with these cells (or none if they alone do not fit).
+  // Other storages: nothing. Not to be called while RowOf runs on other threads.
+  void CacheRows(const std::vector<std::int64_t>& actives) const;
+  std::size_t cached_row_bytes() const { return row_cache_.size() * sizeof(double); }
+  // The grid and the roots (the band's blocks bound D from them).
+  const GridFrame& frame() const { return frame_; }
+  double slice() const { return slice_; }
+  const std::vector<Vec4>& roots() const { return roots_; }
+  // D of a point of the slice and root j, as Row computes it for a cell centre.
+  double LogDistance(const Vec3& p, int j) const;
   // Change counters: SetWeights and BeginVariablePass bump them (the band's cached state keys on them).
   std::uint64_t weights_version() const { return weights_version_; }
   std::uint64_t variable_version() const { return variable_version_; }
@@ -105,6 +119,9 @@ class LogLinearEnergy {
   std::vector<double> d_double_;
   std::vector<float> d_float_;
   std::vector<double> s_top_, s_bottom_;  // V-pass sums
+  double cache_budget_bytes_ = 0;
+  mutable std::vector<std::int32_t> row_slot_;  // per active cell: its row in row_cache_, or -1
+  mutable std::vector<double> row_cache_;
   double energy_scale_ = 1;
   std::uint64_t weights_version_ = 0, variable_version_ = 0;
   double setup_seconds_ = 0;

@@ -71,9 +71,10 @@ TEST(BandEnergyTest, MatchesDenseOnRandomMaps) {
   }
 }
 
-TEST(BandEnergyTest, MatchesDenseAlongMovesThatForceRefreshes) {
-  const Problem p = MakeProblem(24, 12, 10, 4.0, 12.0, 7);
-  LogLinearEnergy dense(p.map, p.grid);
+// Seeded moves of every variable, then far moves and new weights: band and dense stay identical.
+void CheckAlongMoves(int n, const LogLinearOptions& lo) {
+  const Problem p = MakeProblem(n, 12, 10, 4.0, 12.0, 7);
+  LogLinearEnergy dense(p.map, p.grid, {}, lo);
   BandEnergy band(&dense);
   Eigen::VectorXd x = p.map.variables();
   ExpectSame(band.Evaluate(x), dense.Evaluate(x), "start");
@@ -119,6 +120,67 @@ TEST(BandEnergyTest, MatchesDenseAlongMovesThatForceRefreshes) {
   dense.SetWeights(w, eta);
   ExpectSame(band.Evaluate(x), dense.Evaluate(x), "reweighted");
   EXPECT_EQ(band.stats().dense_fallbacks, 0);
+  if (dense.storage() == LogLinearOptions::Storage::kOnTheFly) {
+    // Anchored on blocks, never by a dense sweep, and some blocks were proven saturated.
+    EXPECT_EQ(band.stats().block_sweeps, band.stats().sweeps());
+    EXPECT_GT(band.stats().saturated_blocks, 0);
+    EXPECT_LT(band.stats().sweep_cells, band.stats().sweeps() * band.stats().cells);
+  } else {
+    EXPECT_EQ(band.stats().block_sweeps, 0);
+  }
+}
+
+TEST(BandEnergyTest, MatchesDenseAlongMovesThatForceRefreshes) { CheckAlongMoves(24, {}); }
+
+TEST(BandEnergyTest, BlocksMatchDenseAlongMoves) {
+  LogLinearOptions lo;
+  lo.storage = LogLinearOptions::Storage::kOnTheFly;
+  CheckAlongMoves(30, lo);  // 30 = 7 x 4 + 2: partial blocks at the far faces
+  lo.memory_budget_bytes = 1000;  // no row fits the cache: rows recomputed, same results
+  CheckAlongMoves(26, lo);
+}
+
+TEST(BandEnergyTest, BlockBoundsHoldForEveryCell) {
+  // The premise of a block anchor: every cell's D is within e_j of the block centre's, within q_j
+  // of its first-order Taylor expansion about the centre, and its row norm within N_B.
+  const Problem p = MakeProblem(21, 6, 5, 1.0, 2.0, 3);
+  LogLinearOptions lo;
+  lo.storage = LogLinearOptions::Storage::kOnTheFly;
+  const LogLinearEnergy dense(p.map, p.grid, {}, lo);
+  const auto blocks = BandBlocks::Build(dense, 4);
+  ASSERT_EQ(blocks->count(), 6 * 6 * 6);
+  const int r = dense.root_count();
+  std::vector<double> row(static_cast<std::size_t>(r));
+  std::int64_t finite = 0, checked = 0;
+  for (std::int64_t b = 0; b < blocks->count(); ++b) {
+    const double N = blocks->norm[std::size_t(b)];
+    finite += std::isfinite(N);
+    for (std::int64_t i = blocks->offsets[std::size_t(b)]; i < blocks->offsets[std::size_t(b + 1)]; ++i) {
+      const std::int64_t a = blocks->actives[std::size_t(i)];
+      const double* D = dense.RowOf(a, row.data());
+      const Vec3 c = dense.frame().cell_center(dense.cell_of(a));
+      const double* centre = blocks->centre.data() + 3 * b;
+      double n2 = 1;
+      for (int j = 0; j < r; ++j) {
+        n2 += D[j] * D[j];
+        const std::size_t k = std::size_t(b * r + j);
+        EXPECT_LE(std::fabs(D[j] - blocks->log_distance[k]), blocks->reach[k]);
+        const Vec4& t = dense.roots()[std::size_t(j)];
+        double d2 = (dense.slice() - t[3]) * (dense.slice() - t[3]), slope = 0;
+        for (int e = 0; e < 3; ++e) d2 += (centre[e] - t[e]) * (centre[e] - t[e]);
+        for (int e = 0; e < 3; ++e) slope += (centre[e] - t[e]) / d2 * (c[e] - centre[e]);
+        EXPECT_LE(std::fabs(D[j] - blocks->log_distance[k] - slope), blocks->curvature[k]);
+      }
+      EXPECT_LE(std::sqrt(n2), N);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, dense.active_count());
+  EXPECT_GT(finite, blocks->count() / 2);
+  // Blocks belong to their evaluator.
+  const Problem q = MakeProblem(21, 7, 5, 1.0, 2.0, 3);
+  const LogLinearEnergy other(q.map, q.grid, {}, lo);
+  EXPECT_THROW(BandEnergy(&other, blocks), Error);
 }
 
 TEST(BandEnergyTest, VariablePassMatchesDense) {

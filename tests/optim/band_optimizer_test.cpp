@@ -16,7 +16,9 @@ std::string BandTempDir(const std::string& name) {
 }
 
 // The same schedule with the narrow band and with the dense evaluator: the band's energy and
-// gradient equal the dense ones, so every pass ends at the same psi (the requirement: 1e-9).
+// gradient equal the dense ones, so every pass ends at the same psi (the requirement: 1e-9). A
+// third run keeps no matrix (on-the-fly storage, as beyond ~100^3): its band anchors on blocks and
+// its absolute energies go through a band too; the same psi again.
 TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
   const ScalarGrid sdf = AnalyticTarget("torus", GridFrame::Cube(24, {0, 0, 0}, 3.0));
   RandomMapOptions ro;
@@ -27,18 +29,19 @@ TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
   ro.exponent_max = 6.0;
   RationalMap start = RandomMap(ro);
   start.ln_C = -MedianLogModulus(start, MakeEnergyGrid(sdf, WeightField::kLayer));
-  OptimizeSummary s[2];
-  RationalMap result[2];
-  const char* names[2] = {"band", "dense"};
-  std::string dirs[2];
-  for (int k = 0; k < 2; ++k) {
+  OptimizeSummary s[3];
+  RationalMap result[3];
+  const char* names[3] = {"band", "dense", "band"};
+  std::string dirs[3];
+  for (int k = 0; k < 3; ++k) {
     OptimizeOptions o;
     o.schedule = Schedule::Parse("12(VFRF)24(VF)");
     o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
     for (auto& l : o.schedule.levels)
       for (auto& p : l.passes) p.max_iterations = 30;
     o.evaluator = names[k];
-    o.out_dir = dirs[k] = BandTempDir(names[k]);
+    if (k == 2) o.storage = LogLinearOptions::Storage::kOnTheFly;
+    o.out_dir = dirs[k] = BandTempDir(names[k] + std::to_string(k));
     result[k] = start;
     s[k] = Optimize(sdf, result[k], o);
     ASSERT_TRUE(s[k].complete);
@@ -56,8 +59,16 @@ TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
     EXPECT_LE(band.band["energy_error"].get<double>(), 1e-12) << p;
     EXPECT_GE(band.band["anchors"].get<long long>(), 1) << p;
     EXPECT_LE(band.band["mean_fraction"].get<double>(), 1.0) << p;
+    const PassSummary& blocked = s[2].passes[p];
+    EXPECT_EQ(blocked.absolute_end, dense.absolute_end) << p;
+    EXPECT_EQ(blocked.energy_end, dense.energy_end) << p;
+    EXPECT_EQ(blocked.iterations, dense.iterations) << p;
+    EXPECT_EQ(blocked.band["energy_error"].get<double>(), 0.0) << p;
+    EXPECT_EQ(band.band["block_sweeps"].get<long long>(), 0) << p;
+    if (blocked.kind != 'V') EXPECT_GE(blocked.band["block_sweeps"].get<long long>(), 1) << p;
   }
   EXPECT_EQ(result[0].variables(), result[1].variables());
+  EXPECT_EQ(result[2].variables(), result[1].variables());
   // The summary and the pass-end log lines carry the band's statistics.
   const auto summary = nlohmann::json::parse(std::ifstream(dirs[0] + "/summary.json"));
   EXPECT_TRUE(summary["passes"][0]["band"].contains("energy_error"));
