@@ -22,7 +22,9 @@ void PassWeights::BeginPass(PassKind kind, int resolution, const EnergyGrid& lev
                             SetWeights set, bool shared) {
   pass_ = &level;
   if (kind == PassKind::kReweighted) {
-    const std::vector<double> rw = ReweightedWeights(sdf_, finest_w_, absolute_.LogModulus(start));
+    // The rule reads only the sign of L, which the band's blocks give without a dense sweep.
+    const std::vector<double> rw = ReweightedWeights(
+        sdf_, finest_w_, absolute_band_ ? absolute_band_->LogModulus(start) : absolute_.LogModulus(start));
     reweighted_ = MakeEnergyGrid(sdf_, rw, field_, resolution, LevelWeights::kSampleFinest, 0.0);
     pass_ = &reweighted_;
   }

@@ -20,7 +20,8 @@ struct ReweightCounts {
 };
 
 // sdf: the target (negative inside); weight: W on the same grid; log_modulus: L at each cell
-// (NaN for cells left out, which keep weight 0 inside). Returns W'.
+// (NaN for cells left out, which keep weight 0 inside; only its sign is read, so +-infinity
+// stands for a cell known to be saturated). Returns W'.
 std::vector<double> ReweightedWeights(const ScalarGrid& sdf, const std::vector<double>& weight,
                                       const std::vector<double>& log_modulus,
                                       ReweightCounts* counts = nullptr);

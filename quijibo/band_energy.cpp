@@ -250,17 +250,15 @@ void BandEnergy::UpdateBlockConstants() {
   block_weights_version_ = dense_->weights_version();
 }
 
-Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gradient) {
-  const std::int64_t m = dense_->active_count();
+double BandEnergy::ScanBlocks(const Eigen::VectorXd& x, const double* coeff, std::vector<signed char>* sign,
+                              std::vector<double>* radius) const {
   const std::int64_t nb = blocks_->count();
   const int r = dense_->root_count();
   const double l_sat = kBandSaturation / dense_->alpha();
-  std::vector<double> coeff(static_cast<std::size_t>(r));
-  dense_->Coefficients(x, coeff.data());
   const std::vector<Vec4>& roots = dense_->roots();
   const double slice = dense_->slice();
-  pending_sign_.assign(std::size_t(nb), 0);
-  pending_radius_.assign(std::size_t(nb), 0.0);
+  sign->assign(std::size_t(nb), 0);
+  radius->assign(std::size_t(nb), 0.0);
   double norm_max = 0;
 #pragma omp parallel for schedule(static) reduction(max : norm_max)
   for (std::int64_t b = 0; b < nb; ++b) {
@@ -273,7 +271,7 @@ Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gr
                  pz = blocks_->centre[std::size_t(b * 3 + 2)], h = blocks_->radius[std::size_t(b)];
     double L = x[0], E1 = 0, Q = 0, gx = 0, gy = 0, gz = 0, mag = std::fabs(x[0]);
     for (int j = 0; j < r; ++j) {
-      const double c = coeff[std::size_t(j)], ac = std::fabs(c);
+      const double c = coeff[j], ac = std::fabs(c);
       L += c * D[j];
       E1 += ac * e[j];
       Q += ac * q[j];
@@ -291,10 +289,54 @@ Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gr
     // magnitude; |grad D_pj| h <= e_j), with room.
     const double slack = std::fabs(L) - E * (1 + 8.0 * (r + 2) * kUnit) - l_sat - 16.0 * (r + 2) * kUnit * mag;
     if (!(slack > 0)) continue;
-    pending_sign_[std::size_t(b)] = L > 0 ? 1 : -1;
-    pending_radius_[std::size_t(b)] = slack / N;
+    (*sign)[std::size_t(b)] = L > 0 ? 1 : -1;
+    (*radius)[std::size_t(b)] = slack / N;
     norm_max = std::max(norm_max, N);
   }
+  return norm_max;
+}
+
+std::vector<double> BandEnergy::LogModulus(const Eigen::VectorXd& x) const {
+  if (!blocks_) return dense_->LogModulus(x);
+  dense_->CheckX(x);
+  const int r = dense_->root_count();
+  std::vector<double> coeff(static_cast<std::size_t>(r));
+  dense_->Coefficients(x, coeff.data());
+  std::vector<signed char> sign;
+  std::vector<double> radius;
+  ScanBlocks(x, coeff.data(), &sign, &radius);
+  std::vector<double> L(std::size_t(dense_->frame().cell_count()), std::numeric_limits<double>::quiet_NaN());
+  std::vector<std::int64_t> exact;
+  for (std::int64_t b = 0; b < blocks_->count(); ++b) {
+    const std::int64_t begin = blocks_->offsets[std::size_t(b)], end = blocks_->offsets[std::size_t(b + 1)];
+    if (sign[std::size_t(b)] == 0) {
+      exact.insert(exact.end(), blocks_->actives.begin() + begin, blocks_->actives.begin() + end);
+      continue;
+    }
+    const double value = sign[std::size_t(b)] * std::numeric_limits<double>::infinity();
+    for (std::int64_t i = begin; i < end; ++i) L[std::size_t(dense_->cell_of(blocks_->actives[std::size_t(i)]))] = value;
+  }
+  dense_->CacheRows(exact);
+  const std::int64_t n = std::int64_t(exact.size());
+#pragma omp parallel if (n > kEnergyBlock)
+  {
+    std::vector<double> buffer(static_cast<std::size_t>(r));
+#pragma omp for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i) {
+      const std::int64_t a = exact[std::size_t(i)];
+      L[std::size_t(dense_->cell_of(a))] = x[0] + loglinear::Dot(coeff.data(), dense_->RowOf(a, buffer.data()), r);
+    }
+  }
+  return L;
+}
+
+Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gradient) {
+  const std::int64_t m = dense_->active_count();
+  const std::int64_t nb = blocks_->count();
+  const int r = dense_->root_count();
+  std::vector<double> coeff(static_cast<std::size_t>(r));
+  dense_->Coefficients(x, coeff.data());
+  double norm_max = ScanBlocks(x, coeff.data(), &pending_sign_, &pending_radius_);
   pending_exact_.clear();
   long long saturated = 0;
   for (std::int64_t b = 0; b < nb; ++b) {

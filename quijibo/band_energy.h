@@ -115,6 +115,9 @@ class BandEnergy {
   void Invalidate() { anchored_ = false; }
   const BandStats& stats() const { return stats_; }
   void ResetStats();
+  // L at x on the dense evaluator's grid (NaN at singular cells), exact where it is computed; with
+  // blocks, +-infinity in the blocks proven saturated (|L| > L_sat there; its sign is exact).
+  std::vector<double> LogModulus(const Eigen::VectorXd& x) const;
   // The blocks (null unless the storage is on-the-fly).
   const std::shared_ptr<const BandBlocks>& blocks() const { return blocks_; }
 
@@ -123,6 +126,10 @@ class BandEnergy {
   // time) or, with blocks in full mode, over the blocks and the cells of the unproven ones.
   Evaluation<double> Sweep(const Eigen::VectorXd& x, bool variable, bool with_gradient);
   Evaluation<double> BlockSweep(const Eigen::VectorXd& x, bool with_gradient);
+  // Proves blocks saturated at x: sign (0: not proven) and radius r_B of each; returns the largest
+  // N_B of the saturated blocks.
+  double ScanBlocks(const Eigen::VectorXd& x, const double* coeff, std::vector<signed char>* sign,
+                    std::vector<double>* radius) const;
   // Makes the last sweep's x the anchor.
   void Adopt(const Eigen::VectorXd& x, bool variable, double energy);
   void UpdateConstants();

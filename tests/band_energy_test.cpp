@@ -120,6 +120,22 @@ void CheckAlongMoves(int n, const LogLinearOptions& lo) {
   dense.SetWeights(w, eta);
   ExpectSame(band.Evaluate(x), dense.Evaluate(x), "reweighted");
   EXPECT_EQ(band.stats().dense_fallbacks, 0);
+  // L on the grid: exact where the band computes it, the exact sign (and |L| > L_sat) in blocks.
+  const std::vector<double> Lb = band.LogModulus(x), Ld = dense.LogModulus(x);
+  ASSERT_EQ(Lb.size(), Ld.size());
+  long long infinite = 0;
+  for (std::size_t c = 0; c < Ld.size(); ++c) {
+    if (std::isnan(Ld[c])) {
+      EXPECT_TRUE(std::isnan(Lb[c])) << c;
+    } else if (std::isinf(Lb[c])) {
+      ++infinite;
+      EXPECT_GT(Lb[c] * Ld[c], 0) << c;
+      EXPECT_GT(std::fabs(Ld[c]) * dense.alpha(), kBandSaturation) << c;
+    } else {
+      EXPECT_EQ(Lb[c], Ld[c]) << c;
+    }
+  }
+  EXPECT_EQ(infinite > 0, dense.storage() == LogLinearOptions::Storage::kOnTheFly);
   if (dense.storage() == LogLinearOptions::Storage::kOnTheFly) {
     // Anchored on blocks, never by a dense sweep, and some blocks were proven saturated.
     EXPECT_EQ(band.stats().block_sweeps, band.stats().sweeps());
