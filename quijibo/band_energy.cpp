@@ -316,7 +316,6 @@ std::vector<double> BandEnergy::LogModulus(const Eigen::VectorXd& x) const {
     const double value = sign[std::size_t(b)] * std::numeric_limits<double>::infinity();
     for (std::int64_t i = begin; i < end; ++i) L[std::size_t(dense_->cell_of(blocks_->actives[std::size_t(i)]))] = value;
   }
-  dense_->CacheRows(exact);
   const std::int64_t n = std::int64_t(exact.size());
 #pragma omp parallel if (n > kEnergyBlock)
   {
@@ -352,7 +351,6 @@ Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gr
   ++stats_.block_sweeps;
   stats_.sweep_cells += std::int64_t(pending_exact_.size()) + 2 * nb;
 
-  dense_->CacheRows(pending_exact_);
   row_norm_.resize(std::size_t(m));
   std::vector<std::int64_t> ids, offsets;
   Group(pending_exact_, &ids, &offsets);
@@ -497,7 +495,20 @@ void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
       if (rank_[a] != kOutside) candidates_.push_back(a);
   }
   Group(candidates_, &block_ids_, &block_offsets_);
-  if (!variable) dense_->CacheRows(candidates_);
+  if (!variable && dense_->storage() == LogLinearOptions::Storage::kOnTheFly) {
+    // Rows to keep, most used first: the band's, then the list's by radius.
+    std::vector<std::int64_t> order;
+    order.reserve(candidates_.size());
+    for (std::int64_t a : candidates_)
+      if (rank_[a] < 0) order.push_back(a);
+    for (std::int64_t id : list_cell_) {
+      if (id >= 0) order.push_back(id);
+      else
+        order.insert(order.end(), blocks_->actives.begin() + blocks_->offsets[std::size_t(-id - 1)],
+                     blocks_->actives.begin() + blocks_->offsets[std::size_t(-id)]);
+    }
+    dense_->CacheRows(order);
+  }
   anchor_cost_ = anchor_blocked_ ? std::int64_t(exact_.size()) + 2 * blocks_->count() : m;
   weights_version_ = ~std::uint64_t(0);  // constants follow the new band
   extra_ = 0;

@@ -106,7 +106,7 @@ LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
   UpdateScale();
   const std::int64_t m = std::int64_t(cells_.size());
   const int r = root_count();
-  cache_budget_bytes_ = loglinear.memory_budget_bytes / 4;
+  cache_budget_bytes_ = loglinear.memory_budget_bytes / 2;
   if (storage_ == Storage::kAuto)
     storage_ = double(m) * r * sizeof(double) <= loglinear.memory_budget_bytes ? Storage::kDouble
                                                                                 : Storage::kOnTheFly;
@@ -158,14 +158,10 @@ void LogLinearEnergy::CacheRows(const std::vector<std::int64_t>& actives) const 
   if (double(rows + missing.size()) * double(row_bytes) > cache_budget_bytes_) {
     std::fill(row_slot_.begin(), row_slot_.end(), -1);
     row_cache_.clear();
-    row_cache_.shrink_to_fit();
     rows = 0;
-    missing = actives;
-    std::sort(missing.begin(), missing.end());
-    missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
-    if (double(missing.size()) * double(row_bytes) > cache_budget_bytes_ ||
-        missing.size() >= std::size_t(std::numeric_limits<std::int32_t>::max()))
-      return;
+    const std::size_t fit = std::size_t(std::min(cache_budget_bytes_ / double(row_bytes),
+                                                 double(std::numeric_limits<std::int32_t>::max() - 1)));
+    missing.assign(actives.begin(), actives.begin() + std::min(actives.size(), fit));
   }
   if (missing.empty()) return;
   // Duplicates in `actives` get one slot.

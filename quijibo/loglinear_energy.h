@@ -17,7 +17,7 @@
 //   kDouble   precomputed, 8 bytes per cell and root (97^3 x 331: 2.4 GB), exact
 //   kFloat    precomputed, 4 bytes; ~1e-7 relative error in D (not exact, opt-in)
 //   kOnTheFly recomputed at every evaluation, ~5x slower; the narrow band keeps the rows of the
-//             cells near the surface (CacheRows, within a quarter of the memory budget)
+//             cells near the surface (CacheRows, within half the memory budget)
 //   kAuto     kDouble if it fits in memory_budget_bytes, else kOnTheFly
 #pragma once
 
@@ -80,9 +80,9 @@ class LogLinearEnergy {
   // (root_count() entries) filled.
   const double* RowOf(std::int64_t a, double* buffer) const;
   // On-the-fly storage: computes and keeps the rows of the active cells `actives`, so that RowOf
-  // returns them without logarithms. The cache holds at most a quarter of the memory budget; a call
-  // that would pass it starts the cache afresh with these cells (or none if they alone do not fit).
-  // Other storages: nothing. Not to be called while RowOf runs on other threads.
+  // returns them without logarithms. The cache holds at most half the memory budget; a call that
+  // would pass it starts the cache afresh with as many of `actives`, from the first, as fit (so
+  // list them most used first). Other storages: nothing. Not to be called while RowOf runs.
   void CacheRows(const std::vector<std::int64_t>& actives) const;
   std::size_t cached_row_bytes() const { return row_cache_.size() * sizeof(double); }
   // The grid and the roots (the band's blocks bound D from them).
