@@ -35,7 +35,7 @@ void PassWeights::BeginPass(PassKind kind, int resolution, const EnergyGrid& lev
 
 double PassWeights::Absolute(const Eigen::VectorXd& x) {
   absolute_.SetWeights(finest_.weight, finest_.eta);
-  const double psi = absolute_band_ ? absolute_band_->Evaluate(x, EnergyMode::kFull, false).energy
+  const double psi = absolute_band_ ? absolute_band_->EvaluateOnce(x).energy
                                     : absolute_.Evaluate(x, EnergyMode::kFull, false).energy;
   if (shared_ && pass_) set_(pass_->weight, pass_->eta);
   return psi;

@@ -79,15 +79,19 @@ std::shared_ptr<const BandBlocks> BandBlocks::Build(const LogLinearEnergy& dense
     double n2 = 1.0;
     for (int j = 0; j < r; ++j) {
       D[j] = dense.LogDistance(p, j);
-      const double d = std::exp(D[j]) * (1 - 1e-12);  // rounded down
+      const Vec4& t = dense.roots()[std::size_t(j)];
+      const double ax = p[0] - t[0], ay = p[1] - t[1], az = p[2] - t[2], aw = dense.slice() - t[3];
+      const double d = std::sqrt(ax * ax + ay * ay + az * az + aw * aw) * (1 - 1e-12);  // rounded down
       if (!(d > h)) {
         e[j] = q[j] = inf;
         n2 = std::numeric_limits<double>::infinity();
         continue;
       }
-      e[j] = up(-std::log1p(-h / d) * (1 + 1e-12) + kLogRoom);
+      const double reach = -std::log1p(-h / d) * (1 + 1e-12) + kLogRoom;
+      e[j] = up(reach);
       q[j] = up(h * h / (2 * (d - h) * (d - h)) * (1 + 1e-12) + kLogRoom);
-      const double M = std::max(std::fabs(std::log(d - h)), std::fabs(std::log(d + h))) + kLogRoom;
+      // |D_cj| <= |D_pj| + e_j for the block's cells.
+      const double M = std::fabs(D[j]) + reach;
       n2 += M * M;
     }
     blocks->norm[std::size_t(b)] = std::sqrt(n2) * (1 + 1e-12);
@@ -543,6 +547,20 @@ void BandEnergy::UpdateConstants() {
   prefix_.assign(list_cell_.size() + 1, 0);
   for (std::size_t i = 0; i < list_cell_.size(); ++i) prefix_[i + 1] = prefix_[i] + item_term(list_cell_[i]);
   weights_version_ = dense_->weights_version();
+}
+
+Evaluation<double> BandEnergy::EvaluateOnce(const Eigen::VectorXd& x, bool with_gradient) {
+  dense_->CheckX(x);
+  ++stats_.evaluations;
+  ++stats_.far;  // a sweep that does not anchor
+  if (!blocks_) {
+    stats_.sweep_cells += dense_->active_count();
+    return dense_->Evaluate(x, EnergyMode::kFull, with_gradient);
+  }
+  const std::int64_t m = dense_->active_count();
+  scratch_.resize(std::size_t(m));
+  // The pending state is only read by Adopt, which follows a sweep of its own.
+  return BlockSweep(x, with_gradient);
 }
 
 Evaluation<double> BandEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mode, bool with_gradient) {

@@ -39,7 +39,7 @@
 // The second keeps the cancellation between top and bottom roots (g is L's gradient), the first
 // is tighter right next to a root; the band takes the smaller, E. The whole block is saturated,
 // with the sign of L_p, when |L_p| - E > L_sat (plus the rounding of the sums). Its row norms are
-// bounded by N_B = sqrt(1 + sum_j max(|log(d_j - h)|, |log(d_j + h)|)^2) >= N_c, so it stays
+// bounded by N_B = sqrt(1 + sum_j (|D_pj| + e_j)^2) >= N_c, so it stays
 // saturated while d(x) <= r_B = slack / N_B, like a cell. An anchor then costs one pass over the
 // blocks (~4R operations each) plus the cells of the blocks it could not prove saturated, whose
 // rows the dense evaluator caches (LogLinearEnergy::CacheRows); the list's reach is capped by the
@@ -111,6 +111,9 @@ class BandEnergy {
   // psi and its gradient, equal to dense->Evaluate(x, mode, with_gradient).
   Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode = EnergyMode::kFull,
                               bool with_gradient = true);
+  // One evaluation that leaves the band as it was (no anchor, no cached rows): over the blocks
+  // where there are blocks, else dense. For isolated points, such as the absolute energy's.
+  Evaluation<double> EvaluateOnce(const Eigen::VectorXd& x, bool with_gradient = false);
   // The next evaluation anchors (a dense sweep), e.g. at the start of a pass.
   void Invalidate() { anchored_ = false; }
   const BandStats& stats() const { return stats_; }
