@@ -385,6 +385,7 @@ Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gr
     pending_blocked_ = false;
     pending_exact_.clear();
     ++stats_.dense_fallbacks;
+    stats_.sweep_cells += m;
     return dense_->Evaluate(x, EnergyMode::kFull, with_gradient);
   }
   return dense_->Assemble(x, false, with_gradient, energy, total.data(), nonfinite);
@@ -594,6 +595,7 @@ Evaluation<double> BandEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mod
   }
   if (RoundingBound(x, coeff.data()) > 0.9 / dense_->alpha()) {
     ++stats_.dense_fallbacks;
+    stats_.sweep_cells += dense_->active_count();
     return finish(dense_->Evaluate(x, mode, with_gradient));
   }
   // Cells of the list with r_c <= d(x) may have left saturation: evaluate them.
