@@ -54,7 +54,10 @@ std::shared_ptr<const BandBlocks> BandBlocks::Build(const LogLinearEnergy& dense
   blocks->centre.resize(std::size_t(nb) * 3);
   blocks->radius.resize(std::size_t(nb));
   const float inf = std::numeric_limits<float>::infinity();
-  auto up = [&](double v) { return std::nextafter(float(v), inf); };  // a float bound >= v
+  // A float bound >= v (beyond float's range: infinity, as converting would be undefined).
+  auto up = [&](double v) {
+    return v < double(std::numeric_limits<float>::max()) ? std::nextafter(float(v), inf) : inf;
+  };
 #pragma omp parallel for schedule(dynamic, 16)
   for (std::int64_t b = 0; b < nb; ++b) {
     const int bi = int(b % n[0]), bj = int((b / n[0]) % n[1]), bk = int(b / (std::int64_t(n[0]) * n[1]));
