@@ -317,7 +317,7 @@ std::vector<double> BandEnergy::LogModulus(const Eigen::VectorXd& x) const {
   for (std::int64_t b = 0; b < blocks_->count(); ++b) {
     const std::int64_t begin = blocks_->offsets[std::size_t(b)], end = blocks_->offsets[std::size_t(b + 1)];
     if (sign[std::size_t(b)] == 0) {
-      exact.insert(exact.end(), blocks_->actives.begin() + begin, blocks_->actives.begin() + end);
+      blocks_->AppendCells(b, &exact);
       continue;
     }
     const double value = sign[std::size_t(b)] * std::numeric_limits<double>::infinity();
@@ -350,8 +350,7 @@ Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gr
       ++saturated;
       continue;
     }
-    pending_exact_.insert(pending_exact_.end(), blocks_->actives.begin() + blocks_->offsets[std::size_t(b)],
-                          blocks_->actives.begin() + blocks_->offsets[std::size_t(b + 1)]);
+    blocks_->AppendCells(b, &pending_exact_);
   }
   std::sort(pending_exact_.begin(), pending_exact_.end());
   stats_.saturated_blocks = saturated;
@@ -494,9 +493,7 @@ void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
     for (std::int64_t a : exact_)
       if (rank_[a] != kOutside) candidates_.push_back(a);
     for (std::int64_t id : list_cell_)
-      if (id < 0)
-        candidates_.insert(candidates_.end(), blocks_->actives.begin() + blocks_->offsets[std::size_t(-id - 1)],
-                           blocks_->actives.begin() + blocks_->offsets[std::size_t(-id)]);
+      if (id < 0) blocks_->AppendCells(-id - 1, &candidates_);
     std::sort(candidates_.begin(), candidates_.end());
   } else {
     for (std::int64_t a = 0; a < m; ++a)
@@ -511,9 +508,7 @@ void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
       if (rank_[a] < 0) order.push_back(a);
     for (std::int64_t id : list_cell_) {
       if (id >= 0) order.push_back(id);
-      else
-        order.insert(order.end(), blocks_->actives.begin() + blocks_->offsets[std::size_t(-id - 1)],
-                     blocks_->actives.begin() + blocks_->offsets[std::size_t(-id)]);
+      else blocks_->AppendCells(-id - 1, &order);
     }
     dense_->CacheRows(order);
   }

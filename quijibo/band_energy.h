@@ -74,6 +74,10 @@ struct BandBlocks {
   std::vector<double> radius;         // h per block
   std::int64_t count() const { return std::int64_t(norm.size()); }
   std::size_t bytes() const;
+  // Appends block b's active cells to `out`.
+  void AppendCells(std::int64_t b, std::vector<std::int64_t>* out) const {
+    out->insert(out->end(), actives.begin() + offsets[std::size_t(b)], actives.begin() + offsets[std::size_t(b + 1)]);
+  }
 };
 
 struct BandStats {
