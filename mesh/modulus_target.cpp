@@ -15,16 +15,8 @@ namespace quijibo::mesh {
 
 using nlohmann::json;
 
-namespace {
-
-bool EndsWith(std::string s, const std::string& ext) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s.size() >= ext.size() && s.compare(s.size() - ext.size(), ext.size(), ext) == 0;
-}
-}  // namespace
-
 bool IsMeshFile(const std::string& s) {
-  return EndsWith(s, ".obj") || EndsWith(s, ".ply") || EndsWith(s, ".stl") || EndsWith(s, ".off");
+  return HasExtension(s, ".obj") || HasExtension(s, ".ply") || HasExtension(s, ".stl") || HasExtension(s, ".off");
 }
 
 // A mesh in the unit frame (bounding box centred at the origin, longest side 100/110: the authors'
@@ -62,7 +54,7 @@ LoadedTarget LoadModulusTarget(const std::string& spec, int sdf_resolution) {
               {"file", spec},
               {"unit_frame", {{"scale", s}, {"mesh_center", {c[0], c[1], c[2]}}}},
               {"sdf_resolution", sdf_resolution}};
-  } else if (EndsWith(spec, ".qgrid")) {
+  } else if (HasExtension(spec, ".qgrid")) {
     t.grid = std::make_shared<ScalarGrid>(ReadGrid(spec));
     FractalFrame f;
     const std::string frame_path = FrameJsonPathFor(spec);

@@ -7,6 +7,7 @@
 
 #include "mesh/modulus_target.h"
 #include "quijibo/error.h"
+#include "quijibo/io.h"
 #include "quijibo/json_reader.h"
 #include "quijibo/portal.h"
 #include "quijibo/rational_map.h"
@@ -14,15 +15,6 @@
 namespace quijibo::mesh {
 
 using nlohmann::json;
-
-namespace {
-
-bool EndsWith(std::string s, const std::string& ext) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s.size() >= ext.size() && s.compare(s.size() - ext.size(), ext.size(), ext) == 0;
-}
-
-}  // namespace
 
 PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_resolution) {
   JsonReader r(doc, source);
@@ -51,7 +43,7 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
     s.target.dimension = int(r.number_or("/dimension", 3));
   } else {
     const std::string t = r.string("/target");
-    LoadedTarget lt = LoadModulusTarget(IsMeshFile(t) || EndsWith(t, ".qgrid") ? rel(t) : t, sdf_resolution);
+    LoadedTarget lt = LoadModulusTarget(IsMeshFile(t) || HasExtension(t, ".qgrid") ? rel(t) : t, sdf_resolution);
     s.target = lt.target;
     if (r.has("/dimension")) s.target.dimension = int(r.integer("/dimension"));
     ShapeModulusOptions so;

@@ -53,9 +53,8 @@ class Function : public ceres::FirstOrderFunction {
 
 }  // namespace
 
-LbfgsbResult<double> MinimizeCeres(const std::function<double(const Vec&, Vec&)>& f, Vec& x, const Vec& lb,
-                                   const LbfgsbOptions<double>& options,
-                                   const std::function<IterationAction(int, int, const double&, const double&)>& callback,
+LbfgsbResult<double> MinimizeCeres(const BoundedObjective<double>& f, Vec& x, const Vec& lb,
+                                   const LbfgsbOptions<double>& options, const LbfgsbCallback<double>& callback,
                                    int first_iteration) {
   const int n = int(x.size());
   Reparameterized rep{lb};

@@ -17,10 +17,8 @@
 
 namespace quijibo::optim {
 
-LbfgsbResult<double> MinimizeCeres(
-    const std::function<double(const Eigen::VectorXd&, Eigen::VectorXd&)>& f, Eigen::VectorXd& x,
-    const Eigen::VectorXd& lb, const LbfgsbOptions<double>& options,
-    const std::function<IterationAction(int, int, const double&, const double&)>& callback,
-    int first_iteration = 0);
+LbfgsbResult<double> MinimizeCeres(const BoundedObjective<double>& f, Eigen::VectorXd& x, const Eigen::VectorXd& lb,
+                                   const LbfgsbOptions<double>& options, const LbfgsbCallback<double>& callback,
+                                   int first_iteration = 0);
 
 }  // namespace quijibo::optim

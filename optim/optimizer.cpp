@@ -26,17 +26,6 @@ namespace quijibo::optim {
 
 using nlohmann::json;
 
-std::string StopReasonName(StopReason r) {
-  switch (r) {
-    case StopReason::kTolerance: return "tolerance";
-    case StopReason::kLineSearch: return "line-search";
-    case StopReason::kMaxIterations: return "max-iterations";
-    case StopReason::kInterrupted: return "interrupted";
-    case StopReason::kNonFinite: return "non-finite";
-  }
-  return "?";
-}
-
 json OptimizeSummary::ToJson(const OptimizeOptions& o) const {
   json passes = json::array();
   for (const PassSummary& p : this->passes) passes.push_back(p.ToJson());
@@ -104,10 +93,7 @@ std::string OptimizeSummary::Report() const {
 
 namespace {
 
-// For kill-and-resume tests that do not depend on timing: QUIJIBO_TEST_EXIT_AFTER_STEP=k ends the
-// process at once (_exit, as a crash: no summary, no destructors) right after step k is logged and,
-// when k is a checkpoint, checkpointed. Steps count iterations over the whole run from 1.
-constexpr int kTestExitCode = 86;
+// QUIJIBO_TEST_EXIT_AFTER_STEP (kTestExitCode, optimizer.h), or -1.
 long long TestExitStep() {
   static const long long step = [] {
     const char* s = std::getenv("QUIJIBO_TEST_EXIT_AFTER_STEP");

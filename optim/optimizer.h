@@ -164,4 +164,10 @@ struct OptimizeSummary {
 // writes a checkpoint and returns with complete = false.
 OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options);
 
+// For kill-and-resume tests that do not depend on timing: with QUIJIBO_TEST_EXIT_AFTER_STEP=k in
+// the environment, Optimize ends the process at once with this exit code (_exit, as a crash: no
+// summary, no destructors) right after step k is logged and, when k is a checkpoint,
+// checkpointed. Steps count iterations over the whole run from 1.
+constexpr int kTestExitCode = 86;
+
 }  // namespace quijibo::optim

@@ -1,4 +1,4 @@
-// File output that never leaves a partial file behind.
+// File output that never leaves a partial file behind; file names and text lines.
 #pragma once
 
 #include <string>
@@ -9,6 +9,12 @@ namespace quijibo {
 // see either the old file or the whole new one. Throws quijibo::Error (naming the path and the
 // system's reason) on failure, removing the temporary file.
 void WriteFileAtomically(const std::string& path, const std::string& bytes);
+
+// Whether `path` ends with `ext` (".ply"), ignoring case: file formats are chosen by extension.
+bool HasExtension(const std::string& path, const std::string& ext);
+
+// Whether a line of text holds nothing but whitespace.
+bool IsBlank(const std::string& line);
 
 // Reads a whole file; throws quijibo::Error naming the path when it cannot.
 std::string ReadFile(const std::string& path);

@@ -11,13 +11,13 @@ namespace {
 
 // A sphere target on an n^3 grid and a seeded random map centred on the grid (median L = 0).
 // Large exponents make L steep, as after an optimization: most cells saturate.
-struct Problem {
+struct BandProblem {
   EnergyGrid grid;
   RationalMap map;
 };
 
-Problem MakeProblem(int n, int top, int bottom, double emin, double emax, std::uint64_t seed) {
-  Problem p;
+BandProblem MakeBandProblem(int n, int top, int bottom, double emin, double emax, std::uint64_t seed) {
+  BandProblem p;
   const ScalarGrid sdf = AnalyticTarget("sphere:radius=1", GridFrame::Cube(n, {0.01, -0.02, 0.03}, 3.0));
   p.grid = MakeEnergyGrid(sdf, WeightField::kBalanced);
   RandomMapOptions o;
@@ -59,7 +59,7 @@ TEST(BandEnergyTest, SaturatedTanhIsExactlyOne) {
 TEST(BandEnergyTest, MatchesDenseOnRandomMaps) {
   for (auto storage : {LogLinearOptions::Storage::kDouble, LogLinearOptions::Storage::kOnTheFly}) {
     for (std::uint64_t seed : {1, 2}) {
-      const Problem p = MakeProblem(18, 9, 7, 0.5, 3.0, seed);
+      const BandProblem p = MakeBandProblem(18, 9, 7, 0.5, 3.0, seed);
       LogLinearOptions lo;
       lo.storage = storage;
       const LogLinearEnergy dense(p.map, p.grid, {}, lo);
@@ -73,7 +73,7 @@ TEST(BandEnergyTest, MatchesDenseOnRandomMaps) {
 
 // Seeded moves of every variable, then far moves and new weights: band and dense stay identical.
 BandStats CheckAlongMoves(int n, const LogLinearOptions& lo) {
-  const Problem p = MakeProblem(n, 12, 10, 4.0, 12.0, 7);
+  const BandProblem p = MakeBandProblem(n, 12, 10, 4.0, 12.0, 7);
   LogLinearEnergy dense(p.map, p.grid, {}, lo);
   BandEnergy band(&dense);
   Eigen::VectorXd x = p.map.variables();
@@ -162,7 +162,7 @@ TEST(BandEnergyTest, BlocksMatchDenseAlongMoves) {
 TEST(BandEnergyTest, BlockBoundsHoldForEveryCell) {
   // The premise of a block anchor: every cell's D is within e_j of the block centre's, within q_j
   // of its first-order Taylor expansion about the centre, and its row norm within N_B.
-  const Problem p = MakeProblem(21, 6, 5, 1.0, 2.0, 3);
+  const BandProblem p = MakeBandProblem(21, 6, 5, 1.0, 2.0, 3);
   LogLinearOptions lo;
   lo.storage = LogLinearOptions::Storage::kOnTheFly;
   const LogLinearEnergy dense(p.map, p.grid, {}, lo);
@@ -197,13 +197,13 @@ TEST(BandEnergyTest, BlockBoundsHoldForEveryCell) {
   EXPECT_EQ(checked, dense.active_count());
   EXPECT_GT(finite, blocks->count() / 2);
   // Blocks belong to their evaluator.
-  const Problem q = MakeProblem(21, 7, 5, 1.0, 2.0, 3);
+  const BandProblem q = MakeBandProblem(21, 7, 5, 1.0, 2.0, 3);
   const LogLinearEnergy other(q.map, q.grid, {}, lo);
   EXPECT_THROW(BandEnergy(&other, blocks), Error);
 }
 
 TEST(BandEnergyTest, VariablePassMatchesDense) {
-  const Problem p = MakeProblem(20, 10, 8, 3.0, 9.0, 11);
+  const BandProblem p = MakeBandProblem(20, 10, 8, 3.0, 9.0, 11);
   LogLinearEnergy dense(p.map, p.grid);
   BandEnergy band(&dense);
   const Eigen::VectorXd x = p.map.variables();

@@ -15,7 +15,7 @@ namespace quijibo {
 namespace {
 
 using quijibo::testing::CommandResult;
-inline CommandResult Quijibo(const std::string& args) { return quijibo::testing::RunQuijibo(args); }
+using quijibo::testing::RunQuijibo;
 
 class CliTest : public ::testing::Test {
  protected:
@@ -32,18 +32,18 @@ class CliTest : public ::testing::Test {
 };
 
 TEST_F(CliTest, HelpListsTheSubcommands) {
-  const CommandResult r = Quijibo("--help");
+  const CommandResult r = RunQuijibo("--help");
   EXPECT_EQ(r.code, 0);
   for (const char* s : {"energy", "map", "target", "bench"}) EXPECT_NE(r.out.find(s), std::string::npos) << s;
-  EXPECT_EQ(Quijibo("energy --help").code, 0);
-  EXPECT_NE(Quijibo("").code, 0);
-  EXPECT_NE(Quijibo("no-such-command").code, 0);
+  EXPECT_EQ(RunQuijibo("energy --help").code, 0);
+  EXPECT_NE(RunQuijibo("").code, 0);
+  EXPECT_NE(RunQuijibo("no-such-command").code, 0);
 }
 
 TEST_F(CliTest, EnergyOfARandomMapIsJsonWithGradientAndDiagnostics) {
   const std::string map = Path("map.json");
-  ASSERT_EQ(Quijibo("map random --top 5 --bottom 4 --seed 2 --center-on sphere --target-resolution 12 -o " + map).code, 0);
-  const CommandResult r = Quijibo("energy -t sphere --target-resolution 12 -m " + map);
+  ASSERT_EQ(RunQuijibo("map random --top 5 --bottom 4 --seed 2 --center-on sphere --target-resolution 12 -o " + map).code, 0);
+  const CommandResult r = RunQuijibo("energy -t sphere --target-resolution 12 -m " + map);
   ASSERT_EQ(r.code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_GT(j["energy"].get<double>(), -1.0);
@@ -54,15 +54,15 @@ TEST_F(CliTest, EnergyOfARandomMapIsJsonWithGradientAndDiagnostics) {
   EXPECT_EQ(j["cells"], 12 * 12 * 12);
   // The same energy from the cached evaluator in long double, via a .qgrid target file.
   const std::string grid = Path("sphere.qgrid");
-  ASSERT_EQ(Quijibo("target sphere -r 12 -o " + grid).code, 0);
-  const CommandResult c = Quijibo("energy -t " + grid + " -m " + map + " -e cached -p long-double");
+  ASSERT_EQ(RunQuijibo("target sphere -r 12 -o " + grid).code, 0);
+  const CommandResult c = RunQuijibo("energy -t " + grid + " -m " + map + " -e cached -p long-double");
   ASSERT_EQ(c.code, 0) << c.out;
   EXPECT_NEAR(nlohmann::json::parse(c.out)["energy"].get<double>(), j["energy"].get<double>(), 1e-13);
 }
 
 TEST_F(CliTest, BadInputGetsOneClearLineAndNonZeroExit) {
   auto expect_error = [&](const std::string& args, const std::string& needle) {
-    const CommandResult r = Quijibo(args);
+    const CommandResult r = RunQuijibo(args);
     EXPECT_NE(r.code, 0) << args;
     EXPECT_NE(r.out.find(needle), std::string::npos) << args << "\n got: " << r.out;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
@@ -99,15 +99,15 @@ TEST_F(CliTest, BadInputGetsOneClearLineAndNonZeroExit) {
 
 TEST_F(CliTest, FailedWritesLeaveNoFileBehind) {
   const std::string out = Path("sub/dir/map.json");  // folder does not exist
-  const CommandResult r = Quijibo("map random --top 2 --bottom 2 -o " + out);
+  const CommandResult r = RunQuijibo("map random --top 2 --bottom 2 -o " + out);
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.out.find("cannot write"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(out));
 }
 
 TEST_F(CliTest, RandomMapsAreDeterministic) {
-  ASSERT_EQ(Quijibo("map random --top 30 --bottom 20 --seed 9 -o " + Path("a.json")).code, 0);
-  ASSERT_EQ(Quijibo("map random --top 30 --bottom 20 --seed 9 -o " + Path("b.json")).code, 0);
+  ASSERT_EQ(RunQuijibo("map random --top 30 --bottom 20 --seed 9 -o " + Path("a.json")).code, 0);
+  ASSERT_EQ(RunQuijibo("map random --top 30 --bottom 20 --seed 9 -o " + Path("b.json")).code, 0);
   std::ifstream a(Path("a.json")), b(Path("b.json"));
   const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
   EXPECT_EQ(sa, sb);

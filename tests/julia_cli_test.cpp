@@ -12,8 +12,8 @@
 namespace quijibo {
 namespace {
 
-using CommandRun = quijibo::testing::CommandResult;
-inline CommandRun Quijibo(const std::string& args) { return quijibo::testing::RunQuijibo(args); }
+using quijibo::testing::CommandResult;
+using quijibo::testing::RunQuijibo;
 
 class JuliaCli : public ::testing::Test {
  protected:
@@ -22,7 +22,7 @@ class JuliaCli : public ::testing::Test {
            ("quijibo_julia_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
-    ASSERT_EQ(Quijibo("map random --top 6 --bottom 4 --seed 3 --center-on sphere --target-resolution 12 -o " +
+    ASSERT_EQ(RunQuijibo("map random --top 6 --bottom 4 --seed 3 --center-on sphere --target-resolution 12 -o " +
                       Path("map.json"))
                   .code,
               0);
@@ -34,20 +34,20 @@ class JuliaCli : public ::testing::Test {
 };
 
 TEST_F(JuliaCli, MeshWritesPlyObjVdbAndASummary) {
-  const CommandRun r = Quijibo("mesh " + Path("map.json") + " -o " + Path("m.ply") + " --obj " + Path("m.obj") +
+  const CommandResult r = RunQuijibo("mesh " + Path("map.json") + " -o " + Path("m.ply") + " --obj " + Path("m.obj") +
                         " --vdb " + Path("m.vdb") + " -r 24 -n 2 --frame fractal");
   ASSERT_EQ(r.code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_GT(j["triangles"].get<int>(), 10);
   EXPECT_EQ(j["evaluations"]["non_finite"].get<int>(), 0);
   EXPECT_TRUE(Exists("m.ply") && Exists("m.obj") && Exists("m.vdb"));
-  const CommandRun p = Quijibo("picture render " + Path("m.ply") + " -o " + Path("r.png") + " --size 64 --views 2");
+  const CommandResult p = RunQuijibo("picture render " + Path("m.ply") + " -o " + Path("r.png") + " --size 64 --views 2");
   EXPECT_EQ(p.code, 0) << p.out;
   EXPECT_TRUE(Exists("r.png"));
-  const CommandRun f = Quijibo("picture field " + Path("map.json") + " -o " + Path("f.png") + " --size 32 --axis y");
+  const CommandResult f = RunQuijibo("picture field " + Path("map.json") + " -o " + Path("f.png") + " --size 32 --axis y");
   EXPECT_EQ(f.code, 0) << f.out;
-  ASSERT_EQ(Quijibo("target sphere -r 16 -o " + Path("t.qgrid")).code, 0);
-  const CommandRun s = Quijibo("picture slice " + Path("map.json") + " --target " + Path("t.qgrid") + " -o " +
+  ASSERT_EQ(RunQuijibo("target sphere -r 16 -o " + Path("t.qgrid")).code, 0);
+  const CommandResult s = RunQuijibo("picture slice " + Path("map.json") + " --target " + Path("t.qgrid") + " -o " +
                         Path("s.png") + " --size 32 -n 1");
   ASSERT_EQ(s.code, 0) << s.out;
   const double agreement = nlohmann::json::parse(s.out)["agreement"].get<double>();
@@ -71,7 +71,7 @@ TEST_F(JuliaCli, BadInputFailsWithOneLineAndNoOutput) {
       {"picture render " + Path("map.json") + " -o " + Path("a.png"), "map.json"},
   };
   for (const Case& c : cases) {
-    const CommandRun r = Quijibo(c.args);
+    const CommandResult r = RunQuijibo(c.args);
     EXPECT_NE(r.code, 0) << c.args;
     EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.args << " -> " << r.out;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;

@@ -380,34 +380,34 @@ TEST(Portal, KochSnowflakeIoU) {
 
 // Portals on QUIJIBO rational maps: tests/modulus_features_test.cpp, Portal.OnAQuijiboMapRepeatsItsSet.
 
-using CliRun = quijibo::testing::CommandResult;
-inline CliRun Quijibo(const std::string& args) { return quijibo::testing::RunQuijibo(args); }
+using quijibo::testing::CommandResult;
+using quijibo::testing::RunQuijibo;
 
 TEST(ModulusCli, KochImageAndErrors) {
   const auto dir = std::filesystem::temp_directory_path() / "quijibo_modulus_cli";
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const std::string png = (dir / "k.png").string(), spec = (dir / "k.json").string();
-  CliRun r = Quijibo("portal --koch --png-size 64 -o " + png + " --write-spec " + spec);
+  CommandResult r = RunQuijibo("portal --koch --png-size 64 -o " + png + " --write-spec " + spec);
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(std::filesystem::exists(png));
   // The written spec reproduces the image's inside count.
   const std::string png2 = (dir / "k2.png").string();
-  CliRun r2 = Quijibo("portal " + spec + " --png-size 64 -o " + png2);
+  CommandResult r2 = RunQuijibo("portal " + spec + " --png-size 64 -o " + png2);
   EXPECT_EQ(r2.code, 0) << r2.out;
   EXPECT_EQ(json::parse(r.out)["result"]["inside_pixels"], json::parse(r2.out)["result"]["inside_pixels"]);
   // A bad key: one line naming the file and pointer, exit 1, nothing written.
   std::ofstream(dir / "bad.json") << R"({"format":"quijibo-portals","version":1,"target":"hexagram","portals":[{"mask":{"type":"sphere","center":[0,0],"radius":0.1},"feathr":1}]})";
   const std::string out = (dir / "bad.png").string();
-  r = Quijibo("portal " + (dir / "bad.json").string() + " -o " + out);
+  r = RunQuijibo("portal " + (dir / "bad.json").string() + " -o " + out);
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.out.find("/portals/0"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(out));
-  r = Quijibo("modulus hexagram -o " + (dir / "x.ply").string());
+  r = RunQuijibo("modulus hexagram -o " + (dir / "x.ply").string());
   EXPECT_EQ(r.code, 1);
   EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
   // 2D modulus image of an analytic target, with the generated polynomial written.
-  r = Quijibo("modulus disc --alpha 40 --png-size 48 --seed 3 --write-poly " + (dir / "p.json").string() + " -o " +
+  r = RunQuijibo("modulus disc --alpha 40 --png-size 48 --seed 3 --write-poly " + (dir / "p.json").string() + " -o " +
               (dir / "d.png").string());
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(ReadVersorPolynomial((dir / "p.json").string()).roots.size(), 10u);
@@ -426,7 +426,7 @@ TEST(ModulusCli, CompareWritesTableAndJson) {
   ro.top = 4;
   ro.bottom = 2;
   WriteMap(path("map.json"), RandomMap(ro));
-  CliRun r = Quijibo("compare --target " + path("s.qgrid") + " --map " + path("map.json") +
+  CommandResult r = RunQuijibo("compare --target " + path("s.qgrid") + " --map " + path("map.json") +
                      " --alpha 300 --beta 0 -r 16 --samples 2000 --png-size 32 -o " + path("out"));
   ASSERT_EQ(r.code, 0) << r.out;
   const json j = json::parse(ReadFile(path("out/compare.json")));
@@ -436,7 +436,7 @@ TEST(ModulusCli, CompareWritesTableAndJson) {
   EXPECT_TRUE(std::filesystem::exists(path("out/compare.md")));
   EXPECT_TRUE(std::filesystem::exists(path("out/modulus.png")));
   // A missing map: exit 1, no output folder content.
-  r = Quijibo("compare --target " + path("s.qgrid") + " --map " + path("nope.json") + " -o " + path("out2"));
+  r = RunQuijibo("compare --target " + path("s.qgrid") + " --map " + path("nope.json") + " -o " + path("out2"));
   EXPECT_EQ(r.code, 1);
   EXPECT_FALSE(std::filesystem::exists(path("out2/compare.json")));
   std::filesystem::remove_all(dir);

@@ -16,8 +16,8 @@ namespace quijibo {
 namespace {
 
 using testing::CommandResult;
+using testing::RunQuijibo;
 CommandResult Shell(const std::string& cmd) { return testing::RunShell(cmd); }
-CommandResult Quijibo(const std::string& args) { return testing::RunQuijibo(args); }
 
 bool HaveGnuplot() { return Shell("gnuplot --version").code == 0; }
 
@@ -99,7 +99,7 @@ TEST_F(PlotTest, TwoLogsGiveAPngAndAnSvgWithLabelledAxes) {
   Write("float.jsonl", SyntheticLog("cached float", 0.05));
   const std::string prefix = Path("convergence");
   const CommandResult r =
-      Quijibo("plot " + Path("bunny/log.jsonl") + " " + Path("float.jsonl") + " -o " + prefix +
+      RunQuijibo("plot " + Path("bunny/log.jsonl") + " " + Path("float.jsonl") + " -o " + prefix +
               " --title 'Bunny: it'\\''s \"50%\" @done `x`' --width 900 --height 600");
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("log.jsonl:"), std::string::npos) << "warning about the truncated line: " << r.out;
@@ -119,14 +119,14 @@ TEST_F(PlotTest, TwoLogsGiveAPngAndAnSvgWithLabelledAxes) {
   EXPECT_EQ(outputs, (std::vector<std::string>{prefix + ".png", prefix + ".svg"}));
 
   // --label overrides; a second run replaces the outputs.
-  const CommandResult l = Quijibo("plot " + Path("float.jsonl") + " -o " + prefix + " --label \"it's mine\"");
+  const CommandResult l = RunQuijibo("plot " + Path("float.jsonl") + " -o " + prefix + " --label \"it's mine\"");
   ASSERT_EQ(l.code, 0) << l.out;
   EXPECT_NE(Slurp(prefix + ".svg").find("mine relative"), std::string::npos);
 }
 
 TEST_F(PlotTest, BadInputGetsOneLineAndNoOutputFiles) {
   auto expect_error = [&](const std::string& args, const std::string& needle) {
-    const CommandResult r = Quijibo(args);
+    const CommandResult r = RunQuijibo(args);
     EXPECT_NE(r.code, 0) << args;
     EXPECT_NE(r.out.find(needle), std::string::npos) << args << "\n got: " << r.out;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
@@ -168,7 +168,7 @@ TEST_F(PlotTest, ALogWithoutIterationsStillGivesAPlot) {
   }
   Write("stalled/log.jsonl", log.str());
   const std::string prefix = Path("convergence");
-  const CommandResult r = Quijibo("plot " + Path("stalled/log.jsonl") + " -o " + prefix);
+  const CommandResult r = RunQuijibo("plot " + Path("stalled/log.jsonl") + " -o " + prefix);
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string svg = Slurp(prefix + ".svg");
   EXPECT_NE(svg.find("stalled absolute"), std::string::npos);

@@ -16,10 +16,6 @@ using nlohmann::json;
 
 namespace {
 
-bool Blank(const std::string& s) {
-  return std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isspace(c); });
-}
-
 // "<level> <pass>" from whichever of the two keys a line has.
 std::string PassLabel(const JsonReader& r) {
   std::string label;
@@ -65,14 +61,14 @@ ConvergenceLog ReadConvergenceLog(const std::string& path) {
     b = e + 1;
   }
   std::size_t last = lines.size();
-  while (last > 0 && Blank(lines[last - 1])) --last;  // the last non-blank line is lines[last - 1]
+  while (last > 0 && IsBlank(lines[last - 1])) --last;  // the last non-blank line is lines[last - 1]
 
   std::string current_pass;  // PassKey of the current segment
   bool open_segment = false;
   std::vector<ConvergenceLog::Point> pass_end_absolute;
   for (std::size_t n = 1; n <= last; ++n) {
     const std::string& line = lines[n - 1];
-    if (Blank(line)) continue;
+    if (IsBlank(line)) continue;
     const std::string where = path + ":" + std::to_string(n);
     json j;
     try {

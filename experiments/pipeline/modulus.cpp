@@ -5,20 +5,12 @@
 
 #include "mesh/modulus_target.h"
 #include "quijibo/error.h"
+#include "quijibo/io.h"
 
 namespace quijibo::pipeline {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
-
-namespace {
-
-bool EndsWith(std::string s, const std::string& ext) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s.size() >= ext.size() && s.compare(s.size() - ext.size(), ext.size(), ext) == 0;
-}
-
-}  // namespace
 
 const Schema<VersorOptions>& VersorOptions::Settings() {
   using O = VersorOptions;
@@ -130,8 +122,8 @@ json ModulusStageOptions::ToJson() const {
 ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions& o, const std::string& out) {
   if (std::string why = o.Validate(); !why.empty()) throw Error("modulus: " + why);
   mesh::LoadedTarget lt = mesh::LoadModulusTarget(target, o.sdf_resolution);
-  const bool two_d = o.two_d || EndsWith(out, ".png") || lt.target.dimension == 2;
-  if (two_d && !EndsWith(out, ".png")) throw Error("2D output must be a .png, found \"" + out + "\"");
+  const bool two_d = o.two_d || HasExtension(out, ".png") || lt.target.dimension == 2;
+  if (two_d && !HasExtension(out, ".png")) throw Error("2D output must be a .png, found \"" + out + "\"");
   if (lt.target.dimension == 2 && !two_d) throw Error("a 2D target needs a .png output");
   lt.target.dimension = two_d ? 2 : 3;
   ShapeModulusOptions so = o.shape;

@@ -28,10 +28,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool Blank(const std::string& s) {
-  return std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isspace(c); });
-}
-
 // A string as a gnuplot single-quoted string: no escapes, no macro or backquote expansion; a
 // quote is doubled. Control characters (newlines) become spaces.
 std::string Quote(const std::string& s) {
@@ -94,7 +90,7 @@ std::string LastLine(const std::string& text) {
   std::istringstream in(text);
   std::string line, last;
   while (std::getline(in, line))
-    if (!Blank(line)) last = line;
+    if (!IsBlank(line)) last = line;
   const auto b = last.find_first_not_of(" \t");
   return b == std::string::npos ? std::string() : last.substr(b);
 }

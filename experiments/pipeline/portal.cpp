@@ -14,11 +14,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool EndsWith(std::string s, const std::string& ext) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s.size() >= ext.size() && s.compare(s.size() - ext.size(), ext.size(), ext) == 0;
-}
-
 // An inline spec's files resolved against `base`: target and map when they exist (else an
 // analytic target), SDF masks' files wherever they are, and the versor polynomial.
 json ResolveInlineSpec(json spec, const fs::path& base) {
@@ -129,8 +124,8 @@ PortalStageResult Portal(const PortalStageOptions& o, const std::string& out) {
   jo.escape_radius = o.output.escape.value_or(s.escape);
   if (!output.box && !s.box.empty()) output.box = s.box;
   if (!s.two_d && output.box && output.box->size() == 4) output.box.reset();
-  if (s.two_d && !EndsWith(out, ".png")) throw Error("a 2D scene needs a .png output");
-  if (!s.two_d && !EndsWith(out, ".ply")) throw Error("a 3D scene needs a .ply output");
+  if (s.two_d && !HasExtension(out, ".png")) throw Error("a 2D scene needs a .png output");
+  if (!s.two_d && !HasExtension(out, ".ply")) throw Error("a 3D scene needs a .ply output");
   res.product = Produce(s.map, output, jo, s.target, s.two_d);
   res.report = {{"command", "portal"}, {"spec", source}, {"output", out}, {"result", res.product.report}};
   return res;

@@ -10,20 +10,12 @@
 #include "experiments/pipeline/mesh.h"
 #include "mesh/julia_field.h"
 #include "quijibo/error.h"
+#include "quijibo/io.h"
 
 namespace quijibo::pipeline {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
-
-namespace {
-
-bool EndsWith(std::string s, const std::string& ext) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s.size() >= ext.size() && s.compare(s.size() - ext.size(), ext.size(), ext) == 0;
-}
-
-}  // namespace
 
 double WallSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -145,10 +137,10 @@ Product Produce(std::shared_ptr<const QuaternionMap> map, const ProductOutputOpt
 
 void WriteProduct(const Product& p, const std::string& path) {
   if (p.kind == "png") {
-    if (!EndsWith(path, ".png")) throw Error("2D output must be a .png, found \"" + path + "\"");
+    if (!HasExtension(path, ".png")) throw Error("2D output must be a .png, found \"" + path + "\"");
     WritePng(path, p.image);
   } else {
-    if (!EndsWith(path, ".ply")) throw Error("3D output must be a .ply, found \"" + path + "\"");
+    if (!HasExtension(path, ".ply")) throw Error("3D output must be a .ply, found \"" + path + "\"");
     mesh::WritePly(path, p.mesh);
   }
 }

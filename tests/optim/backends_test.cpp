@@ -12,12 +12,6 @@
 namespace quijibo::optim {
 namespace {
 
-std::string TempDir(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / ("quijibo_backends_" + name);
-  std::filesystem::remove_all(d);
-  return d.string();
-}
-
 double AbsoluteEnergy(const SmallRun& run, const RationalMap& map, WeightField w) {
   return LogLinearEnergy(map, MakeEnergyGrid(run.sdf, w)).Evaluate(map.variables(), EnergyMode::kFull, false).energy;
 }

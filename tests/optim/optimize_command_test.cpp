@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "optim/optimizer.h"
 #include "quijibo_command.h"
 
 namespace quijibo::optim {
@@ -13,7 +14,6 @@ namespace {
 namespace fs = std::filesystem;
 using testing::RunQuijibo;
 
-constexpr int kTestExitCode = 86;  // optimizer.cpp's hard exit (QUIJIBO_TEST_EXIT_AFTER_STEP)
 
 class OptimizeCommand : public ::testing::Test {
  protected:

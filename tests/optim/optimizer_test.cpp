@@ -8,6 +8,7 @@
 
 #include "optim/ceres_backend.h"
 #include "optim/lbfgsb.h"
+#include "optim/line_search.h"
 #include "optim/optimizer.h"
 #include "optim/reweight.h"
 #include "optim/schedule.h"
@@ -178,12 +179,6 @@ TEST(ReweightTest, TotalsFollowTheReferenceRule) {
   EXPECT_NEAR(well, -0.25, 1e-12);
   EXPECT_GT(n.poorly_captured, 0);
   EXPECT_GT(n.well_captured, 0);
-}
-
-std::string TempDir(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / ("quijibo_optim_" + name);
-  std::filesystem::remove_all(d);
-  return d.string();
 }
 
 TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "output_compare.h"
+#include "optim/optimizer.h"
 #include "quijibo_command.h"
 
 namespace quijibo::optim {
@@ -21,7 +22,6 @@ using testing::ExpectSameOutputs;
 using testing::RunQuijibo;
 using testing::SlurpFile;
 
-constexpr int kTestExitCode = 86;  // optimizer.cpp's hard exit
 
 std::vector<std::string> LogLines(const std::string& path) {
   std::vector<std::string> lines;

@@ -1,6 +1,10 @@
 // A small optimization problem for the optimizer's tests: an analytic torus on 20^3 and a seeded
-// random map (12 top, 9 bottom roots) scaled so that half the cells are inside.
+// random map (12 top, 9 bottom roots) scaled so that half the cells are inside; and an empty
+// output folder for a test's run.
 #pragma once
+
+#include <filesystem>
+#include <string>
 
 #include "quijibo/energy.h"
 #include "quijibo/rational_map.h"
@@ -22,5 +26,12 @@ struct SmallRun {
     map.ln_C = -MedianLogModulus(map, MakeEnergyGrid(sdf, WeightField::kLayer));
   }
 };
+
+// <temp>/quijibo_optim_<name>, removed if it exists (the optimizer creates it).
+inline std::string TempDir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / ("quijibo_optim_" + name);
+  std::filesystem::remove_all(d);
+  return d.string();
+}
 
 }  // namespace quijibo
