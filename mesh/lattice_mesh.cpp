@@ -100,8 +100,11 @@ LatticeMeshFacts AnalyzeLatticeMesh(const MeshLattice& l, const std::vector<std:
     const std::int64_t e = edges[v], node = e / 3, axis = e % 3;
     const std::int64_t ijk[3] = {node % nx, (node / nx) % ny, node / (nx * ny)};
     unsigned bits = 0;
-    for (int a = 0; a < 3; ++a)
-      if (a != axis) bits |= (ijk[a] == 0 ? 1u : 0u) << (2 * a) | (ijk[a] == l.cells[a] ? 1u : 0u) << (2 * a + 1);
+    for (int a = 0; a < 3; ++a) {
+      if (a == axis) continue;
+      const std::int64_t i = ijk[a], n = l.cells[a];
+      bits |= (i == 0 ? 1u : 0u) << (2 * a) | (i == n ? 1u : 0u) << (2 * a + 1);
+    }
     return bits;
   };
   for (std::size_t i = 0; i < keys.size();) {
