@@ -146,7 +146,6 @@ LbfgsbResult<Scalar> MinimizeBounded(const BoundedObjective<Scalar>& f, Eigen::M
   }
 }
 
-
 #define QUIJIBO_LBFGSB_INSTANTIATE(Scalar)                                                                 \
   template LbfgsbResult<Scalar> MinimizeBounded<Scalar>(                                                   \
       const BoundedObjective<Scalar>&, Eigen::Matrix<Scalar, -1, 1>&, const Eigen::Matrix<Scalar, -1, 1>&, \
