@@ -60,22 +60,18 @@ void CheckPng(const std::string& path) {
 // the transforms only the command line offers.
 struct JuliaArgs {
   pipeline::MeshStageOptions o;
-  std::string translate, rotate;
-  void add(CLI::App* c, const std::vector<std::string>& keys) {
+  std::string rotate;
+  void add(CLI::App* c, std::vector<std::string> keys) {
+    keys.push_back("translate");
     BindSettings(c, o, keys);
     c->add_option("--slice", o.julia.slice, "k component S of the starting quaternion")->capture_default_str();
-    c->add_option("--translate", translate,
-                  "Root translation x,y,z[,k] added to every root and sample (changes the set when n > 1)");
     c->add_option("--root-scale", o.julia.root_scale, "Roots scaled about the origin by this")->capture_default_str();
     c->add_option("--rotate", rotate, "Rotate the sampling box about its centre: ax,ay,az,degrees");
   }
   // Translation and rotation into the options; the rotation's centre is the box's.
   void finish(const Vec3& box_center) {
-    if (!translate.empty()) {
-      const auto t = ParseNumbers(translate, "--translate");
-      if (t.size() != 3 && t.size() != 4) throw Error("--translate: expected x,y,z or x,y,z,k");
-      for (std::size_t a = 0; a < t.size(); ++a) o.julia.root_translation[a] = t[a];
-    }
+    if (o.translate)
+      for (std::size_t a = 0; a < o.translate->size(); ++a) o.julia.root_translation[a] = (*o.translate)[a];
     if (!rotate.empty()) {
       o.rotation = ParseNumbers(rotate, "--rotate");
       if (o.rotation.size() != 4) throw Error("--rotate: expected ax,ay,az,degrees");
@@ -118,7 +114,7 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
               "A surface that does not cross the box is a result, not an error: write the summary (0 "
               "triangles) and no mesh files");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
-  a->j.add(c, {"resolution", "iterations", "escape", "iso", "frame", "precision"});
+  a->j.add(c, {"resolution", "iterations", "escape", "iso", "iteration_frame", "detail", "frame", "precision"});
   c->callback([a, mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
     pipeline::CheckMeshFiles(a->files);
@@ -134,7 +130,7 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
       throw Error(a->map + ": the surface log|q_n| = " + std::to_string(o.iso) +
                   " does not cross the box (no triangles); nothing written");
     if (r.empty()) std::fprintf(stderr, "quijibo: the surface does not cross the box (no triangles): no mesh written\n");
-    pipeline::WriteMeshFiles(r, map, o, a->files);
+    pipeline::WriteMeshFiles(r, o, a->files);
     WriteOutput(a->summary, pipeline::MeshSummary(r, o, a->map, a->files).dump(2) + "\n");
   });
 }

@@ -9,7 +9,9 @@
 #include <ctime>
 #include <filesystem>
 
+#include "experiments/bind.h"
 #include "experiments/cli.h"
+#include "experiments/pipeline/mesh.h"
 #include "mesh/fidelity.h"
 #include "mesh/sdf_command.h"
 #include "mesh/triangle_mesh.h"
@@ -29,6 +31,7 @@ namespace {
 struct FidelityArgs {
   std::string map, target, julia_mesh, shape_mesh, out;
   mesh::FidelityOptions o;
+  pipeline::MeshStageOptions iteration;  // the mesh stage's iteration_frame, detail and translate
 };
 
 void AddFidelityOptions(CLI::App* c, mesh::FidelityOptions& o) {
@@ -41,16 +44,27 @@ void AddFidelityOptions(CLI::App* c, mesh::FidelityOptions& o) {
   c->add_option("--samples", o.surface_samples, "Points per mesh for Chamfer and Hausdorff")->capture_default_str();
 }
 
-mesh::Fidelity Measure(const FidelityArgs& a) {
+json Measure(const FidelityArgs& a) {
   const RationalMap map = ReadMap(a.map);
   const ScalarGrid target = ReadGrid(a.target);
-  mesh::Fidelity f = mesh::MeasureSets(map, target, a.o);
+  mesh::FidelityOptions o = a.o;
+  o.reference_frame = a.iteration.iteration_frame == "reference";
+  o.detail = a.iteration.detail;
+  if (a.iteration.translate)
+    for (std::size_t k = 0; k < a.iteration.translate->size(); ++k) o.julia.root_translation[k] = (*a.iteration.translate)[k];
+  mesh::Fidelity f = mesh::MeasureSets(map, target, o);
   if (!a.julia_mesh.empty() || !a.shape_mesh.empty()) {
     if (a.julia_mesh.empty() || a.shape_mesh.empty())
       throw Error("fidelity: Chamfer and Hausdorff need both --julia and --shape");
-    mesh::MeasureSurfaceDistances(mesh::ReadMesh(a.julia_mesh), mesh::ReadMesh(a.shape_mesh), a.o, f);
+    const mesh::TriangleMesh julia = mesh::ReadMesh(a.julia_mesh), shape = mesh::ReadMesh(a.shape_mesh);
+    mesh::MeasureSurfaceDistances(julia, shape, o, f);
+    json j = f.ToJson();
+    // The shape box's side in the meshes' (user) frame: the boxes of the box-counting dimension.
+    const double side = (1.0 - 2.0 * map.frame.padding) / map.frame.scale;
+    j["detail"] = mesh::MeasureMeshDetail(julia, &shape, side).ToJson();
+    return j;
   }
-  return f;
+  return f.ToJson();
 }
 
 // Runs `quijibo args...` (this executable), stdout and stderr to files; returns the exit code.
@@ -104,7 +118,10 @@ void AddShapeCommands(CLI::App& app) {
   c->add_option("--shape", a->shape_mesh, "The target mesh");
   c->add_option("-o,--out", a->out, "Write the JSON here (default: standard output)");
   AddFidelityOptions(c, a->o);
-  c->callback([a] { WriteOutput(a->out, Measure(*a).ToJson().dump(1) + "\n"); });
+  c->add_option("--closing", a->o.closing, "Closed IoU: half side of the closing's cube, lattice cells")
+      ->capture_default_str()->check(CLI::Range(0, 16));
+  BindSettings(c, a->iteration, {"iteration_frame", "detail", "translate"});
+  c->callback([a] { WriteOutput(a->out, Measure(*a).dump(1) + "\n"); });
 
   struct BenchArgs {
     std::string suite, out = "results/shapes", schedule = "experiments/schedules/demo.json", markdown, images,
@@ -231,8 +248,14 @@ void AddShapeCommands(CLI::App& app) {
         if (fs::exists(run / "optimized/map.json")) {
           const RationalMap opt = ReadMap((run / "optimized/map.json").string());
           mesh::Fidelity f = mesh::MeasureSets(opt, target, b->o);
-          if (fs::exists(run / "mesh/julia.ply")) mesh::MeasureSurfaceDistances(mesh::ReadMesh((run / "mesh/julia.ply").string()), shape, b->o, f);
+          json detail;
+          if (fs::exists(run / "mesh/julia.ply")) {
+            const mesh::TriangleMesh julia = mesh::ReadMesh((run / "mesh/julia.ply").string());
+            mesh::MeasureSurfaceDistances(julia, shape, b->o, f);
+            detail = mesh::MeasureMeshDetail(julia, &shape, (1.0 - 2.0 * opt.frame.padding) / opt.frame.scale).ToJson();
+          }
           row["optimized"] = f.ToJson();
+          if (!detail.is_null()) row["optimized"]["detail"] = detail;
           const json summary = ParseJson(ReadFile((run / "optimized/summary.json").string()), "summary.json");
           row["psi_start"] = summary.value("absolute_start", 0.0);
           row["psi_end"] = summary.value("absolute_end", 0.0);
@@ -285,7 +308,8 @@ void AddShapeCommands(CLI::App& app) {
       return;
     }
     std::string md = "| shape | triangles | roots | start IoU | ψ start → end | one-step IoU | leak | n-step IoU | n-step leak | "
-                     "Chamfer | Hausdorff | time |\n|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|\n";
+                     "Chamfer | Hausdorff | area ratio | box dim. | components | time |\n"
+                     "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const json& r : results) {
       const json opt = r.value("optimized", json::object());
       md += "| " + r["name"].get<std::string>() + " | " + std::to_string(r.value("triangles", 0)) + " | " +
@@ -293,7 +317,10 @@ void AddShapeCommands(CLI::App& app) {
             (r.contains("psi_end") ? F(r["psi_start"], 3) + " → " + F(r["psi_end"], 3) : "–") + " | " +
             num(opt, "one_step", "iou") + " | " + num(opt, "one_step", "leak") + " | " + num(opt, "n_step", "iou") +
             " | " + num(opt, "n_step", "leak") + " | " + (opt.contains("chamfer") ? F(opt["chamfer"], 4) : "–") + " | " +
-            (opt.contains("hausdorff") ? F(opt["hausdorff"], 3) : "–") + " | " + F(r["seconds"], 0) + " s |";
+            (opt.contains("hausdorff") ? F(opt["hausdorff"], 3) : "–") + " | " + num(opt, "detail", "area_ratio") +
+            " | " + num(opt, "detail", "box_dimension") + " | " +
+            (opt.contains("detail") ? std::to_string(opt["detail"].value("components", 0)) : "–") + " | " +
+            F(r["seconds"], 0) + " s |";
       if (r.contains("error")) md += " " + r["error"].get<std::string>();
       md += "\n";
       if (opt.contains("one_step")) ious.push_back(opt["one_step"]["iou"]);

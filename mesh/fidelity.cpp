@@ -1,12 +1,11 @@
 #include "mesh/fidelity.h"
 
-#include <limits>
-
-#include <unordered_map>
-
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "mesh/sdf.h"
 #include "quijibo/error.h"
@@ -19,15 +18,86 @@ std::string FidelityOptions::validate() const {
   if (surface_samples < 100 || surface_samples > 10000000) return "surface samples must be in [100, 1e7]";
   if (julia.iterations > 0)
     if (auto why = julia.validate(); !why.empty()) return why;
+  if (!(detail > 0) || !std::isfinite(detail)) return "detail must be a positive finite number";
+  if (closing < 0 || closing > 16) return "closing must be in [0, 16] cells";
   return {};
 }
 
 nlohmann::json Fidelity::ToJson() const {
   nlohmann::json j = {{"inside_nodes", inside_nodes},
                       {"one_step", {{"iou", one_step.iou}, {"leak", one_step.leak}, {"set_nodes", one_step.set_nodes}}}};
-  if (has_n_step) j["n_step"] = {{"iou", n_step.iou}, {"leak", n_step.leak}, {"set_nodes", n_step.set_nodes}};
+  if (has_n_step)
+    j["n_step"] = {{"iou", n_step.iou},
+                   {"closed_iou", n_step_closed_iou},
+                   {"leak", n_step.leak},
+                   {"set_nodes", n_step.set_nodes}};
   if (chamfer >= 0) j["chamfer"] = chamfer, j["hausdorff"] = hausdorff;
   return j;
+}
+
+namespace {
+
+double EdgeLength(const Vec3& a, const Vec3& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+double SurfaceArea(const TriangleMesh& m) {
+  double total = 0;
+  for (const auto& t : m.triangles) {
+    const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
+    const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    total += 0.5 * std::hypot(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]);
+  }
+  return total;
+}
+
+// Connected components of the triangles, joined by shared vertices (union-find).
+std::int64_t MeshComponents(const TriangleMesh& m) {
+  std::vector<std::int64_t> parent(m.vertices.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = std::int64_t(i);
+  auto find = [&](std::int64_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  std::vector<char> used(m.vertices.size(), 0);
+  for (const auto& t : m.triangles) {
+    for (int k = 0; k < 3; ++k) used[t[k]] = 1;
+    parent[find(t[1])] = find(t[0]);
+    parent[find(t[2])] = find(t[0]);
+  }
+  std::int64_t count = 0;
+  for (std::size_t i = 0; i < parent.size(); ++i) count += used[i] && find(std::int64_t(i)) == std::int64_t(i);
+  return count;
+}
+
+// One pass of a separable cube filter of half side r over an n^3 lattice: dilation (any set node
+// within r along the axis) or erosion (every node within r set; outside the lattice counts as
+// unset for both, so a set touching the lattice's faces erodes there as an open set would).
+std::vector<char> CubeFilter(const std::vector<char>& in, int n, int r, bool dilate) {
+  std::vector<char> cur = in, next(in.size());
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::int64_t stride = axis == 0 ? 1 : axis == 1 ? n : std::int64_t(n) * n;
+    for (std::int64_t c = 0; c < std::int64_t(cur.size()); ++c) {
+      const int i = int((c / stride) % n);
+      bool any = false, all = true;
+      for (int d = -r; d <= r; ++d) {
+        const int j = i + d;
+        const bool v = j >= 0 && j < n && cur[std::size_t(c + std::int64_t(d) * stride)];
+        any |= v, all &= v;
+      }
+      next[std::size_t(c)] = dilate ? any : all;
+    }
+    std::swap(cur, next);
+  }
+  return cur;
+}
+
+}  // namespace
+
+// Morphological closing of an n^3 lattice set by a cube of half side r (cells).
+std::vector<char> Close(const std::vector<char>& set, int n, int r) {
+  if (r <= 0) return set;
+  return CubeFilter(CubeFilter(set, n, r, true), n, r, false);
 }
 
 Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& o) {
@@ -44,22 +114,27 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
     return true;
   };
   std::unique_ptr<JuliaMap<double>> julia;
-  if (o.julia.iterations > 0) julia = std::make_unique<JuliaMap<double>>(map, o.julia);
+  const RationalMap iterated =
+      (o.reference_frame || o.detail != 1.0) ? InFrame(map, IterationFrame(map.frame, o.reference_frame, o.detail)) : map;
+  if (o.julia.iterations > 0) julia = std::make_unique<JuliaMap<double>>(iterated, o.julia);
   const std::int64_t count = std::int64_t(n) * n * n;
+  std::vector<char> in_set(julia ? static_cast<std::size_t>(count) : 0), in_target(static_cast<std::size_t>(count));
   std::int64_t inside = 0, inter1 = 0, union1 = 0, set1 = 0, leak1 = 0, interN = 0, unionN = 0, setN = 0, leakN = 0;
 #pragma omp parallel for schedule(dynamic, 64) reduction(+ : inside, inter1, union1, set1, leak1, interN, unionN, setN, leakN)
   for (std::int64_t c = 0; c < count; ++c) {
     const int i = int(c % n), j = int((c / n) % n), k = int(c / (std::int64_t(n) * n));
     const Vec3 p{bc[0] - half + i * step, bc[1] - half + j * step, bc[2] - half + k * step};
     const bool in = in_grid(p) && target.sample(p) < 0;
+    in_target[std::size_t(c)] = in;
     const bool outside_b = std::abs(p[0] - bc[0]) > b || std::abs(p[1] - bc[1]) > b || std::abs(p[2] - bc[2]) > b;
     inside += in;
     const double L = OneStepLogModulus(map, p);
     const bool s1 = !std::isnan(L) && L < 0;
     set1 += s1, inter1 += s1 && in, union1 += s1 || in, leak1 += s1 && outside_b;
     if (julia) {
-      const double v = julia->At(p).log_modulus;
+      const double v = julia->At(iterated.frame.user_to_fractal(map.frame.fractal_to_user(p))).log_modulus;
       const bool sn = !std::isnan(v) && v < o.iso;
+      in_set[std::size_t(c)] = sn;
       setN += sn, interN += sn && in, unionN += sn || in, leakN += sn && outside_b;
     }
   }
@@ -73,8 +148,69 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
     return s;
   };
   f.one_step = figures(set1, inter1, union1, leak1);
-  if (julia) f.n_step = figures(setN, interN, unionN, leakN), f.has_n_step = true;
+  if (julia) {
+    f.n_step = figures(setN, interN, unionN, leakN), f.has_n_step = true;
+    const std::vector<char> closed = Close(in_set, n, o.closing);
+    std::int64_t inter = 0, uni = 0;
+    for (std::size_t c = 0; c < closed.size(); ++c) inter += closed[c] && in_target[c], uni += closed[c] || in_target[c];
+    f.n_step_closed_iou = uni ? double(inter) / double(uni) : 0;
+  }
   return f;
+}
+
+nlohmann::json MeshDetail::ToJson() const {
+  nlohmann::json j = {{"area", area}, {"components", components}, {"box_dimension", dimension}, {"box_counts", box_counts}};
+  if (area_ratio >= 0) j["area_ratio"] = area_ratio;
+  return j;
+}
+
+MeshDetail MeasureMeshDetail(const TriangleMesh& julia, const TriangleMesh* shape, double side) {
+  if (!(side > 0) || !std::isfinite(side)) throw Error("detail: the shape box's side must be positive");
+  MeshDetail d;
+  d.area = SurfaceArea(julia);
+  if (shape) {
+    const double a = SurfaceArea(*shape);
+    d.area_ratio = a > 0 ? d.area / a : -1;
+  }
+  d.components = MeshComponents(julia);
+  // Box counting: points on every triangle no farther apart than half the finest box, so a
+  // triangle marks every finest box it crosses except at most slivers at box corners.
+  constexpr int kFirst = 3, kLast = 7;
+  const double finest = side / double(1 << kLast), spacing = finest / 2;
+  Vec3 lo{0, 0, 0};
+  if (!julia.vertices.empty()) lo = julia.vertices[0];
+  for (const Vec3& v : julia.vertices)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]);
+  std::vector<std::unordered_set<std::uint64_t>> boxes(kLast - kFirst + 1);
+  auto mark = [&](const Vec3& p) {
+    std::uint64_t cell[3];
+    for (int a = 0; a < 3; ++a) cell[a] = std::uint64_t(std::max(0.0, std::floor((p[a] - lo[a]) / finest)));
+    for (int k = kLast; k >= kFirst; --k) {
+      const int shift = kLast - k;
+      boxes[k - kFirst].insert(((cell[0] >> shift) << 42) | ((cell[1] >> shift) << 21) | (cell[2] >> shift));
+    }
+  };
+  for (const auto& t : julia.triangles) {
+    const Vec3 &a = julia.vertices[t[0]], &b = julia.vertices[t[1]], &c = julia.vertices[t[2]];
+    const double longest = std::max({EdgeLength(a, b), EdgeLength(b, c), EdgeLength(c, a)});
+    const int m = std::max(1, int(std::ceil(longest / spacing)));
+    for (int i = 0; i <= m; ++i)
+      for (int j = 0; i + j <= m; ++j) {
+        const double u = double(i) / m, v = double(j) / m;
+        mark({a[0] + u * (b[0] - a[0]) + v * (c[0] - a[0]), a[1] + u * (b[1] - a[1]) + v * (c[1] - a[1]),
+              a[2] + u * (b[2] - a[2]) + v * (c[2] - a[2])});
+      }
+  }
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  const int levels = kLast - kFirst + 1;
+  for (int k = kFirst; k <= kLast; ++k) {
+    const std::int64_t count = std::int64_t(boxes[k - kFirst].size());
+    d.box_counts.push_back(count);
+    const double x = k * std::log(2.0), y = std::log(double(std::max<std::int64_t>(count, 1)));
+    sx += x, sy += y, sxx += x * x, sxy += x * y;
+  }
+  d.dimension = julia.triangles.empty() ? 0 : (levels * sxy - sx * sy) / (levels * sxx - sx * sx);
+  return d;
 }
 
 std::vector<Vec3> SampleSurface(const TriangleMesh& m, int count, std::uint64_t seed) {

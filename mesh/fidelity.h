@@ -9,6 +9,15 @@
 //   n-step     {log|q_n| < iso} of the meshed field (JuliaMap, n iterations)
 //   IoU        |set and inside| / |set or inside|
 //   leak       |set outside B| / |inside|
+//   closed IoU IoU of the n-step set after a morphological closing (dilation then erosion by a cube
+//              of `closing` lattice cells' half side): whether the coarse shape, the silhouette,
+//              stays when the surface grows intricate (holes and folds finer than the closing fill)
+// The n-step set is iterated in IterationFrame(map.frame, reference_frame, detail) (the mesh
+// stage's `iteration_frame` and `detail`), sampled at the same user points.
+// Detail of a meshed set (MeasureMeshDetail): its area against the target mesh's, its connected
+// components, and a box-counting dimension: the boxes of side s = side / 2^k (k = 3 .. 7, side the
+// shape box's) that the surface meets, N(s), and the least-squares slope of log N against
+// log(1/s): 2 for a smooth surface, more as detail fills space at those scales.
 // Chamfer and Hausdorff distances compare the meshed Julia set with the target mesh by points
 // sampled uniformly by area on each (seeded), nearest distances by BVH: Chamfer is the mean of
 // the two directed mean distances, Hausdorff the larger directed maximum, both divided by the
@@ -29,6 +38,9 @@ struct FidelityOptions {
   int lattice = 72;             // nodes per axis, in [8, 512]
   double extend = 0.2;          // growth of B on every side, as a fraction of its side
   JuliaOptions julia;           // the n-step field (iterations 0: skip it)
+  bool reference_frame = false;  // the n-step set iterated in the reference frame (IterationFrame)
+  double detail = 1.0;           // ... with the frame's scale divided by this
+  int closing = 2;              // closed IoU: half side of the closing's cube, lattice cells, in [0, 16]
   double iso = 0.0;
   int surface_samples = 20000;  // points per mesh for Chamfer and Hausdorff
   std::uint64_t seed = 1;
@@ -43,6 +55,7 @@ struct SetFigures {
 struct Fidelity {
   std::int64_t inside_nodes = 0;
   SetFigures one_step, n_step;
+  double n_step_closed_iou = 0;  // the n-step set after the closing (has_n_step)
   bool has_n_step = false;
   double chamfer = -1, hausdorff = -1;  // fractions of the diagonal; -1 when not measured
   nlohmann::json ToJson() const;
@@ -50,6 +63,23 @@ struct Fidelity {
 
 // The lattice figures of `map` against the target grid `target` (both in the fractal frame).
 Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& options = {});
+
+// How much detail a meshed set has (see the header comment).
+struct MeshDetail {
+  double area = 0;              // of the mesh
+  double area_ratio = -1;       // area / the target mesh's area (-1 without a target mesh)
+  std::int64_t components = 0;  // connected components (by shared vertices)
+  double dimension = 0;         // box-counting dimension estimate
+  std::vector<std::int64_t> box_counts;  // N(side / 2^k), k = 3 .. 7
+  nlohmann::json ToJson() const;
+};
+// `julia` and `shape` (may be null) in the same frame; `side` the side of the shape box in that
+// frame (the boxes' scales). Throws quijibo::Error for a side that is not positive.
+MeshDetail MeasureMeshDetail(const TriangleMesh& julia, const TriangleMesh* shape, double side);
+
+// Morphological closing (dilation then erosion by a cube of half side r cells) of a set on an n^3
+// lattice (x fastest); r = 0: the set itself.
+std::vector<char> Close(const std::vector<char>& set, int n, int r);
 
 // `count` points uniformly distributed by area on `mesh` (seeded; doubles from the top 53 bits of
 // std::mt19937_64, portable); empty when the mesh has no area.

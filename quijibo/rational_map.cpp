@@ -158,6 +158,45 @@ std::string RandomMapOptions::validate() const {
   return {};
 }
 
+RationalMap InFrame(const RationalMap& map, const FractalFrame& to) {
+  if (auto why = to.validate(); !why.empty()) throw Error("frame change: " + why);
+  const FractalFrame& from = map.frame;
+  if (to.scale != from.scale || to.translation != from.translation || to.padding != from.padding)
+    throw Error("frame change: the new frame must keep the map's normalization (scale, translation, padding)");
+  const double k = to.fractal_radius / from.fractal_radius;
+  Vec4 b{0, 0, 0, 0};
+  for (int a = 0; a < 3; ++a) b[a] = to.fractal_radius * (from.origin[a] - to.origin[a]);
+  RationalMap m = map;
+  m.frame = to;
+  auto move = [&](std::vector<Vec4>& roots) {
+    for (Vec4& r : roots)
+      for (int a = 0; a < 4; ++a) r[a] = k * r[a] + b[a];
+  };
+  move(m.top_roots);
+  move(m.bottom_roots);
+  double top = 0, bottom = 0;
+  for (double e : map.top_exponents) top += e;
+  for (double e : map.bottom_exponents) bottom += e;
+  m.ln_C = map.ln_C - (map.tau * top - map.beta * bottom) * std::log(k);
+  if (b != Vec4{0, 0, 0, 0}) m.leading_zero_roots = false;
+  if (!std::isfinite(m.ln_C)) throw Error("frame change: ln C is not finite in the new frame");
+  return m;
+}
+
+FractalFrame ReferenceFrame(const FractalFrame& frame) {
+  FractalFrame f = frame;
+  f.origin = {0.5, 0.5, 0.5};
+  f.fractal_radius = 3.0 / (1.0 - 2.0 * frame.padding);
+  return f;
+}
+
+FractalFrame IterationFrame(const FractalFrame& frame, bool reference, double detail) {
+  if (!(detail > 0) || !std::isfinite(detail)) throw Error("detail must be a positive finite number");
+  FractalFrame f = reference ? ReferenceFrame(frame) : frame;
+  f.fractal_radius /= detail;
+  return f;
+}
+
 RationalMap RandomMap(const RandomMapOptions& o) {
   if (auto why = o.validate(); !why.empty()) throw Error("random map: " + why);
   // mt19937_64 and hand-made uniform draws: std::uniform_real_distribution's output is not

@@ -85,6 +85,29 @@ inline double OneStepLogModulus(const RationalMap& m, const Vec3& p, double slic
   return m.ln_C + m.tau * top - m.beta * bottom;
 }
 
+// The same map expressed in another fractal frame of the same normalization (frame.h):
+// w' = k w + b with k = to.fractal_radius / from.fractal_radius and
+// b = to.fractal_radius (from.origin - to.origin). The roots move with the frame (their k
+// components scale by k) and ln C absorbs the scale, ln C' = ln C - (tau sum T - beta sum B) ln k,
+// so L'(w') = L(w): the one-step set is the same set of user points. The n-step set is not: the
+// iteration's unit ball stays at the new origin with radius 1 (fidelity.md §3b, meshing.md
+// "Detail"). Roots that leave the origin stop being zero roots (leading_zero_roots becomes false
+// unless b = 0). Throws quijibo::Error when `to` is invalid or its normalization (scale,
+// translation, padding) differs from the map's.
+RationalMap InFrame(const RationalMap& map, const FractalFrame& to);
+
+// The reference code's world frame for a map's normalization (quijibo-code.md §2): the origin at
+// the centre of the mesh's bounding box and the longest side 3 units (fractal radius 4 with the
+// default padding 0.125; 3 / (1 - 2 padding) otherwise), the frame in which the paper's root
+// translations (Figs. 1c, 9c, 10c: 1.41, 0.54, 1.07 along z) are given.
+FractalFrame ReferenceFrame(const FractalFrame& frame);
+
+// The frame a map's Julia set is iterated in for meshing and measuring (docs/meshing.md
+// "Detail"): the map's own frame or ReferenceFrame, its fractal radius divided by `detail` (> 0),
+// so that the iteration's unit ball is `detail` times larger against the shape. Throws
+// quijibo::Error for a detail that is not positive and finite.
+FractalFrame IterationFrame(const FractalFrame& frame, bool reference, double detail);
+
 // Indices into the variable vector.
 struct VariableIndex {
   static constexpr int kLnC = 0, kTau = 1, kBeta = 2, kFirstExponent = 3;

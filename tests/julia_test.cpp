@@ -157,6 +157,41 @@ TEST(Julia, RootTranslationChangesNothingForOneIteration) {
   EXPECT_GT(differ, 10);
 }
 
+TEST(Julia, AFrameChangeKeepsTheOneStepSetOfEveryUserPoint) {
+  RationalMap map = SmallMap();
+  map.frame.scale = 0.3, map.frame.translation = {0.1, 0.2, 0.05}, map.frame.origin = {0.45, 0.52, 0.6};
+  map.frame.fractal_radius = 7.5;
+  FractalFrame to = map.frame;
+  to.fractal_radius = 2.5, to.origin = {0.5, 0.5, 0.5};
+  const RationalMap moved = InFrame(map, to);
+  for (const Vec3& p : Points(50, 5)) {
+    const Vec3 q = to.user_to_fractal(map.frame.fractal_to_user(p));
+    EXPECT_NEAR(OneStepLogModulus(moved, q), OneStepLogModulus(map, p), 1e-10);
+  }
+  // And back again.
+  const RationalMap back = InFrame(moved, map.frame);
+  EXPECT_NEAR(back.ln_C, map.ln_C, 1e-12);
+  for (int i = 0; i < map.top_count(); ++i)
+    for (int a = 0; a < 4; ++a) EXPECT_NEAR(back.top_roots[i][a], map.top_roots[i][a], 1e-12);
+  // A frame of another normalization is refused.
+  to.scale = 0.5;
+  EXPECT_THROW(InFrame(map, to), Error);
+}
+
+TEST(Julia, TheReferenceFrameHasTheShapeThreeUnitsLongAboutTheBoxCentre) {
+  FractalFrame f;
+  f.origin = {0.4, 0.55, 0.5}, f.fractal_radius = 11.0;
+  const FractalFrame r = ReferenceFrame(f);
+  EXPECT_EQ(r.fractal_radius, 4.0);
+  EXPECT_EQ(r.origin, (Vec3{0.5, 0.5, 0.5}));
+  f.padding = 0.25;
+  EXPECT_NEAR(ReferenceFrame(f).fractal_radius * (1 - 2 * f.padding), 3.0, 1e-12);
+  // Detail divides the radius: the unit ball grows against the shape.
+  EXPECT_NEAR(IterationFrame(f, false, 2.0).fractal_radius, 5.5, 1e-12);
+  EXPECT_THROW(IterationFrame(f, false, 0.0), Error);
+  EXPECT_THROW(IterationFrame(f, false, std::nan("")), Error);
+}
+
 TEST(Julia, RotationIsRigid) {
   const SampleTransform t = SampleTransform::AxisAngle({0, 0, 2}, 90, {1, 0, 0});
   const Vec3 w = t.apply({2, 0, 0});

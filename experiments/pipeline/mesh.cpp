@@ -55,6 +55,20 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
           .Number(
               "iso", "--iso", "Iso value of log|q_n| (reference: 0)", [](auto& o) -> double& { return o.iso; }, -1e6,
               1e6)
+          .Numbers(
+              "translate", "--translate",
+              "Root translation x,y,z[,k] added to every root and sample, in the iteration frame (changes the set "
+              "when n > 1; the paper's Fig. 1c: 0,0,1.41 with iteration_frame reference)",
+              [](auto& o) -> std::optional<std::vector<double>>& { return o.translate; }, {3, 4}, -1e6, 1e6)
+          .Choice("iteration_frame", "--iteration-frame",
+                  "Frame the map is iterated in (and --translate, --box given in): map (as optimized) or reference "
+                  "(the reference code's: origin at the box centre, longest side 3)",
+                  [](auto& o) -> std::string& { return o.iteration_frame; }, {"map", "reference"})
+          .Number(
+              "detail", "--detail",
+              "Fractal detail: the trap ball grows by this factor against the shape, the one-step set stays "
+              "(1: as optimized, smooth; 2-4: intricate)",
+              [](auto& o) -> double& { return o.detail; }, 0.0, 1e3, true)
           .Choice("frame", "--frame", "Coordinates of the output: user (the input mesh's) or fractal",
                   [](auto& o) -> std::string& { return o.frame; }, {"user", "fractal"})
           .Boolean("vdb", "", "Also write julia.vdb", [](auto& o) -> bool& { return o.vdb; })
@@ -99,8 +113,16 @@ bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& o, m
   return true;
 }
 
-MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& o, const Mesher& mesher) {
+RationalMap IterationMap(const RationalMap& map, const MeshStageOptions& o) {
+  if (o.iteration_frame == "map" && o.detail == 1.0) return map;
+  return InFrame(map, IterationFrame(map.frame, o.iteration_frame == "reference", o.detail));
+}
+
+MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& o, const Mesher& mesher) {
+  if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
+  const RationalMap map = IterationMap(input_map, o);
   MeshStageResult r;
+  r.frame = map.frame;
   r.meshing = o.meshing;
   mesh::MeshingOptions& m = r.meshing;
   const double half = map.frame.fractal_radius / 2;
@@ -110,8 +132,9 @@ MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& o, con
   if (o.box.size() == 6)
     for (int a = 0; a < 3; ++a) m.min_corner[a] = o.box[a], m.max_corner[a] = o.box[3 + a];
   if (auto why = m.validate(); !why.empty()) throw Error("mesh: " + why);
-  if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
   r.julia = o.julia;
+  if (o.translate)
+    for (std::size_t a = 0; a < o.translate->size(); ++a) r.julia.root_translation[a] = (*o.translate)[a];
   if (o.rotation.size() == 4) {
     const Vec3 center{(m.min_corner[0] + m.max_corner[0]) / 2, (m.min_corner[1] + m.max_corner[1]) / 2,
                       (m.min_corner[2] + m.max_corner[2]) / 2};
@@ -140,7 +163,7 @@ void CheckMeshFiles(const MeshFiles& f) {
   CheckOutput(f.vdb, {".vdb"}, "--vdb");
 }
 
-void WriteMeshFiles(const MeshStageResult& r, const RationalMap& map, const MeshStageOptions& o, const MeshFiles& f) {
+void WriteMeshFiles(const MeshStageResult& r, const MeshStageOptions& o, const MeshFiles& f) {
   if (r.empty()) return;
   if (Extension(f.out) == ".obj")
     mesh::WriteObj(f.out, r.mesh);
@@ -150,7 +173,7 @@ void WriteMeshFiles(const MeshStageResult& r, const RationalMap& map, const Mesh
   if (f.vdb.empty()) return;
   const bool user = o.frame == "user";
   const mesh::MeshLattice& l = r.band.lattice;
-  const double spacing = r.summary.spacing / (user ? map.frame.user_to_fractal_scale() : 1.0);
+  const double spacing = r.summary.spacing / (user ? r.frame.user_to_fractal_scale() : 1.0);
   mesh::VdbVolumeOptions vo;
   vo.voxel_size = spacing;
   vo.half_width = o.vdb_band;
@@ -159,7 +182,7 @@ void WriteMeshFiles(const MeshStageResult& r, const RationalMap& map, const Mesh
   vo.coordinates = user ? "user" : "fractal";
   mesh::VdbRawField raw;
   if (Wants(o, "field")) {
-    raw.origin = user ? map.frame.fractal_to_user(l.origin) : l.origin;
+    raw.origin = user ? r.frame.fractal_to_user(l.origin) : l.origin;
     raw.spacing = spacing;
     raw.voxels = &r.band.nodes;
     raw.values = &r.band.values;
@@ -190,6 +213,11 @@ json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std:
                   {"out", r.empty() ? json(nullptr) : json(f.out)},
                   {"frame", o.frame},
                   {"julia", JuliaJson(r.julia, o.iso, o.precision)},
+                  {"iteration_frame",
+                   {{"name", o.iteration_frame},
+                    {"detail", o.detail},
+                    {"fractal_radius", r.frame.fractal_radius},
+                    {"origin", r.frame.origin}}},
                   {"box", {{"min", r.meshing.min_corner}, {"max", r.meshing.max_corner}}},
                   {"resolution", r.meshing.resolution},
                   {"cells", s.cells},

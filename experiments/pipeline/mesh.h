@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -29,6 +30,18 @@ struct MeshStageOptions {
   std::vector<double> box;
   // Rotate the sampling box about its centre: ax, ay, az, degrees; empty: none.
   std::vector<double> rotation;
+  // Root translation x, y, z[, k] in the iteration frame (julia.root_translation; the reference's
+  // "root translation"); none: julia.root_translation as it is.
+  std::optional<std::vector<double>> translate;
+  // The frame the map is iterated in: "map" (the frame it was optimized in) or "reference" (the
+  // reference code's world frame, ReferenceFrame in rational_map.h, where the paper's translations
+  // 1.41 / 0.54 / 1.07 are given). The one-step set is the same in both; the box and `translate`
+  // are in this frame.
+  std::string iteration_frame = "map";
+  // Fractal detail: the iteration frame's scale is divided by this (InFrame), so the trap ball
+  // grows by this factor against the shape while the one-step set stays (docs/meshing.md "Detail").
+  // 1: the set as optimized (smooth with the trap frame scale); larger: more intricate.
+  double detail = 1.0;
   std::vector<std::string> vdb_grids{"surface", "density"};  // of the .vdb: surface, density, field
   double vdb_band = 3.0;                                     // half-width of the level set's narrow band, voxels
   bool ply_double = false;                                   // PLY coordinates as double
@@ -62,11 +75,16 @@ struct MeshStageResult {
   mesh::TriangleMesh mesh;  // in the output frame (user or fractal, rotation applied)
   mesh::MeshingSummary summary;
   mesh::MeshingOptions meshing;  // as used (the box filled in)
+  FractalFrame frame;            // the iteration frame (IterationMap): of the box and the fractal output
   JuliaOptions julia;            // as used (the placement's centre filled in)
   mesh::FieldBand band;          // with vdb grid "field"
   std::int64_t escaped = 0, non_finite = 0;
   bool empty() const { return mesh.triangles.empty(); }
 };
+
+// The map as the mesh stage iterates it: `map` in the iteration frame, its scale divided by
+// `detail`. The same map when both are at their defaults.
+RationalMap IterationMap(const RationalMap& map, const MeshStageOptions& options);
 
 // Meshes `map`'s Julia set. Throws quijibo::Error on invalid options.
 MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& options, const Mesher& mesher = LocalMesher);
@@ -78,8 +96,7 @@ struct MeshFiles {
 // Fails early (before meshing) when a path has the wrong extension or its folder does not exist.
 void CheckMeshFiles(const MeshFiles& files);
 // Writes the mesh files (nothing for an empty set).
-void WriteMeshFiles(const MeshStageResult& result, const RationalMap& map, const MeshStageOptions& options,
-                    const MeshFiles& files);
+void WriteMeshFiles(const MeshStageResult& result, const MeshStageOptions& options, const MeshFiles& files);
 // The summary (summary.json of the run's mesh stage, the standard output of `quijibo mesh`).
 nlohmann::json MeshSummary(const MeshStageResult& result, const MeshStageOptions& options, const std::string& map_path,
                            const MeshFiles& files);

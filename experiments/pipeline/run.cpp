@@ -151,7 +151,7 @@ void Runner::Quijibo() {
       // A set without surface in the box is a result: the summary says 0 triangles, the report why.
       if (r.empty() && !quiet_)
         std::fprintf(stderr, "quijibo: the surface does not cross the box (no triangles): no mesh written\n");
-      WriteMeshFiles(r, map, mo, f);
+      WriteMeshFiles(r, mo, f);
       WriteFileAtomically(dir + "/summary.json", MeshSummary(r, mo, map_path, f).dump(2) + "\n");
     });
 

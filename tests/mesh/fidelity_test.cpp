@@ -69,6 +69,71 @@ TEST(Fidelity, ChamferAndHausdorffOfTwoConcentricSpheres) {
   EXPECT_LT(self.hausdorff, 1e-9);
 }
 
+TEST(Fidelity, ClosingFillsHolesSmallerThanItsCube) {
+  // A 20^3 block of a 32^3 lattice with every other node of its interior removed (a sponge): the
+  // closing by half side 1 fills it back; by 0 it is the set itself.
+  const int n = 32;
+  std::vector<char> sponge(std::size_t(n) * n * n, 0), block = sponge;
+  for (int k = 6; k < 26; ++k)
+    for (int j = 6; j < 26; ++j)
+      for (int i = 6; i < 26; ++i) {
+        const std::size_t c = std::size_t(i + n * (j + n * k));
+        block[c] = 1;
+        sponge[c] = (i + j + k) % 2 == 0 || i == 6 || i == 25 || j == 6 || j == 25 || k == 6 || k == 25;
+      }
+  EXPECT_EQ(Close(sponge, n, 0), sponge);
+  EXPECT_EQ(Close(sponge, n, 1), block);
+  EXPECT_EQ(Close(block, n, 2), block);
+}
+
+TEST(Fidelity, MeshDetailOfASphereIsTwoDimensionalAndGrowsWithWrinkles) {
+  const TriangleMesh sphere = testing::Icosphere(5, {0, 0, 0}, 1.0);
+  const MeshDetail d = MeasureMeshDetail(sphere, &sphere, 2.0);
+  EXPECT_NEAR(d.area, 4 * M_PI, 0.05);
+  EXPECT_NEAR(d.area_ratio, 1.0, 1e-12);
+  EXPECT_EQ(d.components, 1);
+  ASSERT_EQ(d.box_counts.size(), 5u);
+  EXPECT_NEAR(d.dimension, 2.0, 0.1);
+  // Radial wrinkles of wavelength ~ 1/20 of the side: more area, more boxes at the fine scales.
+  TriangleMesh wrinkled = sphere;
+  for (Vec3& v : wrinkled.vertices) {
+    const double r = 1.0 + 0.08 * std::sin(40 * v[0]) * std::sin(40 * v[1]) * std::sin(40 * v[2]);
+    for (double& x : v) x *= r;
+  }
+  const MeshDetail w = MeasureMeshDetail(wrinkled, &sphere, 2.0);
+  EXPECT_GT(w.area_ratio, 1.1);
+  EXPECT_GT(w.dimension, d.dimension + 0.05);
+  // Two spheres: two components.
+  TriangleMesh two = sphere;
+  const int offset = int(two.vertices.size());
+  for (Vec3 v : sphere.vertices) two.vertices.push_back({v[0] + 3, v[1], v[2]});
+  for (auto t : sphere.triangles) two.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  EXPECT_EQ(MeasureMeshDetail(two, nullptr, 2.0).components, 2);
+  EXPECT_LT(MeasureMeshDetail(two, nullptr, 2.0).area_ratio, 0);
+  EXPECT_THROW(MeasureMeshDetail(sphere, nullptr, 0.0), Error);
+}
+
+TEST(Fidelity, DetailKeepsTheOneStepSetAndChangesTheNStepSet) {
+  // Two top roots and a bottom root: a set whose n-step iteration depends on the frame's scale.
+  RationalMap m;
+  m.top_roots = {{0, 0, 0, 0}, {0.5, 0.2, 0, 0}};
+  m.top_exponents = {1.0, 1.5};
+  m.bottom_roots = {{-1.2, 0.3, 0.1, 0}};
+  m.bottom_exponents = {0.7};
+  m.ln_C = 0.3;
+  FidelityOptions o;
+  o.lattice = 40;
+  o.julia.iterations = 4;
+  const ScalarGrid target = SphereTarget(1.0);
+  const Fidelity base = MeasureSets(m, target, o);
+  o.detail = 3.0;
+  const Fidelity more = MeasureSets(m, target, o);
+  EXPECT_EQ(more.one_step.set_nodes, base.one_step.set_nodes);
+  EXPECT_NE(more.n_step.set_nodes, base.n_step.set_nodes);
+  o.detail = 0.0;
+  EXPECT_THROW(MeasureSets(m, target, o), Error);
+}
+
 TEST(Fidelity, RejectsBadOptions) {
   FidelityOptions o;
   o.lattice = 2;
