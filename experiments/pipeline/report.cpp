@@ -125,6 +125,18 @@ std::string RunReport(const Experiment& e, const std::vector<StageRecord>& recor
                : std::string("one-node specks kept"))
        << ", " << ms.value("resolution", 0) << "^3 cells, n = " << ms["julia"].value("iterations", 0) << ", "
        << Fixed(ms.value("seconds", 0.0), 1) << " s.\n\n";
+    if (ms.contains("iteration_frame") && (ms["iteration_frame"].value("name", "map") != "map" ||
+                                           ms["iteration_frame"].value("detail", 1.0) != 1.0))
+      md << "Iterated in the " << ms["iteration_frame"].value("name", "map") << " frame with detail "
+         << ms["iteration_frame"].value("detail", 1.0) << " (fractal radius "
+         << Fixed(ms["iteration_frame"].value("fractal_radius", 0.0), 3) << "), root translation "
+         << ms["julia"]["root_translation"].dump() << ".\n\n";
+    if (ms.contains("detail")) {
+      const json& d = ms["detail"];
+      md << "Detail: surface area " << Fixed(d.value("area_ratio", 0.0), 2)
+         << "× the target mesh's, box-counting dimension " << Fixed(d.value("box_dimension", 0.0), 3) << " (2 for a "
+         << "smooth surface; boxes of 1/8 to 1/128 of the shape's side).\n\n";
+    }
   }
   for (const char* prod : {"modulus", "portal"}) {
     const std::string dir = prod;

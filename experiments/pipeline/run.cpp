@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "experiments/pipeline/plot.h"
+#include "mesh/fidelity.h"
 #include "mesh/sdf_command.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
@@ -152,7 +153,14 @@ void Runner::Quijibo() {
       if (r.empty() && !quiet_)
         std::fprintf(stderr, "quijibo: the surface does not cross the box (no triangles): no mesh written\n");
       WriteMeshFiles(r, mo, f);
-      WriteFileAtomically(dir + "/summary.json", MeshSummary(r, mo, map_path, f).dump(2) + "\n");
+      json summary = MeshSummary(r, mo, map_path, f);
+      // How much fractal detail the set has, against the target mesh (mesh/fidelity.h).
+      const TargetOptions& t = *e_.target;
+      if (!r.empty() && !t.mesh.empty() && mo.frame == "user") {
+        const mesh::TriangleMesh shape = mesh::ReadMesh(t.mesh);
+        summary["detail"] = mesh::MeasureMeshDetail(r.mesh, &shape, (1.0 - 2.0 * map.frame.padding) / map.frame.scale).ToJson();
+      }
+      WriteFileAtomically(dir + "/summary.json", summary.dump(2) + "\n");
     });
 
   // 5. pictures: the optimized set against the target, and the mesh rendered.
