@@ -18,7 +18,7 @@ std::string FidelityOptions::validate() const {
   if (surface_samples < 100 || surface_samples > 10000000) return "surface samples must be in [100, 1e7]";
   if (julia.iterations > 0)
     if (auto why = julia.validate(); !why.empty()) return why;
-  if (!(detail > 0) || !std::isfinite(detail)) return "detail must be a positive finite number";
+  if (!(detail >= 0 && detail <= 100)) return "detail must be in [0, 100]";
   if (closing < 0 || closing > 16) return "closing must be in [0, 16] cells";
   return {};
 }
@@ -114,8 +114,7 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
     return true;
   };
   std::unique_ptr<JuliaMap<double>> julia;
-  const RationalMap iterated =
-      (o.reference_frame || o.detail != 1.0) ? InFrame(map, IterationFrame(map.frame, o.reference_frame, o.detail)) : map;
+  const RationalMap iterated = IterationMap(map, o.reference_frame, o.detail);
   if (o.julia.iterations > 0) julia = std::make_unique<JuliaMap<double>>(iterated, o.julia);
   const std::int64_t count = std::int64_t(n) * n * n;
   std::vector<char> in_set(julia ? static_cast<std::size_t>(count) : 0), in_target(static_cast<std::size_t>(count));

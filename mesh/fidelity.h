@@ -12,8 +12,8 @@
 //   closed IoU IoU of the n-step set after a morphological closing (dilation then erosion by a cube
 //              of `closing` lattice cells' half side): whether the coarse shape, the silhouette,
 //              stays when the surface grows intricate (holes and folds finer than the closing fill)
-// The n-step set is iterated in IterationFrame(map.frame, reference_frame, detail) (the mesh
-// stage's `iteration_frame` and `detail`), sampled at the same user points.
+// The n-step set is of IterationMap(map, reference_frame, detail) (the mesh stage's
+// `iteration_frame` and `detail`), sampled at the same user points.
 // Detail of a meshed set (MeasureMeshDetail): its area against the target mesh's, its connected
 // components, and a box-counting dimension: the boxes of side s = side / 2^k (k = 3 .. 7, side the
 // shape box's) that the surface meets, N(s), and the least-squares slope of log N against
@@ -38,8 +38,8 @@ struct FidelityOptions {
   int lattice = 72;             // nodes per axis, in [8, 512]
   double extend = 0.2;          // growth of B on every side, as a fraction of its side
   JuliaOptions julia;           // the n-step field (iterations 0: skip it)
-  bool reference_frame = false;  // the n-step set iterated in the reference frame (IterationFrame)
-  double detail = 1.0;           // ... with the frame's scale divided by this
+  bool reference_frame = false;  // the n-step set iterated in the reference frame (ReferenceFrame)
+  double detail = 0.0;           // ... of the map with this detail (WithDetail)
   int closing = 2;              // closed IoU: half side of the closing's cube, lattice cells, in [0, 16]
   double iso = 0.0;
   int surface_samples = 20000;  // points per mesh for Chamfer and Hausdorff

@@ -1,5 +1,6 @@
 #include "quijibo/rational_map.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -190,11 +191,68 @@ FractalFrame ReferenceFrame(const FractalFrame& frame) {
   return f;
 }
 
-FractalFrame IterationFrame(const FractalFrame& frame, bool reference, double detail) {
-  if (!(detail > 0) || !std::isfinite(detail)) throw Error("detail must be a positive finite number");
-  FractalFrame f = reference ? ReferenceFrame(frame) : frame;
-  f.fractal_radius /= detail;
-  return f;
+RationalMap IterationMap(const RationalMap& map, bool reference_frame, double detail) {
+  RationalMap m = detail == 0.0 ? map : WithDetail(map, detail);
+  return reference_frame ? InFrame(m, ReferenceFrame(m.frame)) : m;
+}
+
+double SurfaceSteepness(const RationalMap& map, int lattice) {
+  if (lattice < 2) throw Error("surface steepness: the lattice needs at least 2 nodes per axis");
+  const double side = map.frame.fractal_radius * (1.0 - 2.0 * map.frame.padding);
+  const Vec3 c = map.frame.box_center();
+  const double step = side / (lattice - 1);
+  auto node = [&](int i, int j, int k) {
+    return Vec3{c[0] - side / 2 + i * step, c[1] - side / 2 + j * step, c[2] - side / 2 + k * step};
+  };
+  const std::int64_t n = lattice;
+  std::vector<double> L(std::size_t(n * n * n));
+#pragma omp parallel for schedule(static)
+  for (std::int64_t id = 0; id < n * n * n; ++id)
+    L[std::size_t(id)] = OneStepLogModulus(map, node(int(id % n), int((id / n) % n), int(id / (n * n))));
+  // The crossings by linear interpolation along the edges, |grad L| there by central differences.
+  std::vector<Vec3> crossings;
+  for (std::int64_t id = 0; id < n * n * n; ++id) {
+    const int i = int(id % n), j = int((id / n) % n), k = int(id / (n * n));
+    const int next[3][3] = {{i + 1, j, k}, {i, j + 1, k}, {i, j, k + 1}};
+    for (const auto& q : next) {
+      if (q[0] >= lattice || q[1] >= lattice || q[2] >= lattice) continue;
+      const double a = L[std::size_t(id)], b = L[std::size_t(q[0] + n * (q[1] + n * q[2]))];
+      if (!std::isfinite(a) || !std::isfinite(b) || (a < 0) == (b < 0)) continue;
+      const double t = a / (a - b);
+      const Vec3 p = node(i, j, k), r = node(q[0], q[1], q[2]);
+      crossings.push_back({p[0] + t * (r[0] - p[0]), p[1] + t * (r[1] - p[1]), p[2] + t * (r[2] - p[2])});
+    }
+  }
+  if (crossings.empty()) return 0.0;
+  const double h = step * 1e-3;
+  std::vector<double> g(crossings.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t m = 0; m < std::int64_t(crossings.size()); ++m) {
+    double sq = 0;
+    for (int a = 0; a < 3; ++a) {
+      Vec3 lo = crossings[std::size_t(m)], hi = lo;
+      lo[a] -= h, hi[a] += h;
+      const double d = (OneStepLogModulus(map, hi) - OneStepLogModulus(map, lo)) / (2 * h);
+      sq += d * d;
+    }
+    g[std::size_t(m)] = std::sqrt(sq);
+  }
+  std::nth_element(g.begin(), g.begin() + std::ptrdiff_t(g.size() / 2), g.end());
+  return g[g.size() / 2];
+}
+
+RationalMap WithDetail(const RationalMap& map, double detail, double* lambda) {
+  if (!(detail >= 0) || !std::isfinite(detail)) throw Error("detail must be a finite number >= 0");
+  double l = 1.0;
+  if (detail > 0) {
+    const double width = detail / 100.0 * map.frame.fractal_radius * (1.0 - 2.0 * map.frame.padding);
+    const double steep = SurfaceSteepness(map);
+    if (steep > 0) l = std::min(1.0, 2.0 / (width * steep));
+  }
+  if (lambda) *lambda = l;
+  RationalMap m = map;
+  m.ln_C *= l, m.tau *= l, m.beta *= l;
+  return m;
 }
 
 RationalMap RandomMap(const RandomMapOptions& o) {

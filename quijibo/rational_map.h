@@ -91,10 +91,14 @@ inline double OneStepLogModulus(const RationalMap& m, const Vec3& p, double slic
 // components scale by k) and ln C absorbs the scale, ln C' = ln C - (tau sum T - beta sum B) ln k,
 // so L'(w') = L(w): the one-step set is the same set of user points. The n-step set is not: the
 // iteration's unit ball stays at the new origin with radius 1 (fidelity.md §3b, meshing.md
-// "Detail"). Roots that leave the origin stop being zero roots (leading_zero_roots becomes false
+// "Root translation"). Roots that leave the origin stop being zero roots (leading_zero_roots becomes false
 // unless b = 0). Throws quijibo::Error when `to` is invalid or its normalization (scale,
 // translation, padding) differs from the map's.
 RationalMap InFrame(const RationalMap& map, const FractalFrame& to);
+
+// The map as the mesh stage and the fidelity measures iterate it: WithDetail(map, detail), then in
+// ReferenceFrame when `reference_frame`; `map` itself when detail is 0 and the frame the map's.
+RationalMap IterationMap(const RationalMap& map, bool reference_frame, double detail);
 
 // The reference code's world frame for a map's normalization (quijibo-code.md §2): the origin at
 // the centre of the mesh's bounding box and the longest side 3 units (fractal radius 4 with the
@@ -102,11 +106,22 @@ RationalMap InFrame(const RationalMap& map, const FractalFrame& to);
 // translations (Figs. 1c, 9c, 10c: 1.41, 0.54, 1.07 along z) are given.
 FractalFrame ReferenceFrame(const FractalFrame& frame);
 
-// The frame a map's Julia set is iterated in for meshing and measuring (docs/meshing.md
-// "Detail"): the map's own frame or ReferenceFrame, its fractal radius divided by `detail` (> 0),
-// so that the iteration's unit ball is `detail` times larger against the shape. Throws
-// quijibo::Error for a detail that is not positive and finite.
-FractalFrame IterationFrame(const FractalFrame& frame, bool reference, double detail);
+
+// The one-step surface's steepness: the median of |grad L| (per fractal unit) at the points where
+// L changes sign along the edges of a `lattice`^3 lattice over the shape box (the cube of side
+// fractal_radius (1 - 2 padding) about the frame's box_center()). 0 when L does not change sign
+// there. Deterministic; O(lattice^3 roots).
+double SurfaceSteepness(const RationalMap& map, int lattice = 48);
+
+// Fractal detail (docs/meshing.md "Detail"): the map with ln C, tau and beta multiplied by
+// lambda = min(1, 2 / (w |grad L|)), w = `detail` percent of the shape box's side and |grad L| the
+// SurfaceSteepness, so that the band |L| < 1 about the one-step surface is w wide (or the map is
+// unchanged when it already is wider). L becomes lambda L: the one-step set {L < 0} is exactly
+// the same, but the iteration sees a map whose modulus leaves 1 slowly across the surface (the
+// role of the shape modulus' alpha, 2023 §4) and whose versors turn lambda times slower, so the
+// n-step set grows folds and flakes at the scale w. `detail` 0 returns the map. Throws
+// quijibo::Error for a negative or non-finite detail. `lambda` (optional) receives the factor.
+RationalMap WithDetail(const RationalMap& map, double detail, double* lambda = nullptr);
 
 // Indices into the variable vector.
 struct VariableIndex {

@@ -186,10 +186,38 @@ TEST(Julia, TheReferenceFrameHasTheShapeThreeUnitsLongAboutTheBoxCentre) {
   EXPECT_EQ(r.origin, (Vec3{0.5, 0.5, 0.5}));
   f.padding = 0.25;
   EXPECT_NEAR(ReferenceFrame(f).fractal_radius * (1 - 2 * f.padding), 3.0, 1e-12);
-  // Detail divides the radius: the unit ball grows against the shape.
-  EXPECT_NEAR(IterationFrame(f, false, 2.0).fractal_radius, 5.5, 1e-12);
-  EXPECT_THROW(IterationFrame(f, false, 0.0), Error);
-  EXPECT_THROW(IterationFrame(f, false, std::nan("")), Error);
+}
+
+TEST(Julia, DetailWidensTheBandAboutTheSurfaceAndKeepsTheOneStepSet) {
+  // One top root at the origin with a steep exponent: L = ln C + 40 log|q|, the one-step set the
+  // ball of radius e^(-ln C / 40) = 1, |grad L| = 40 on its surface.
+  RationalMap m;
+  m.top_roots = {{0, 0, 0, 0}};
+  m.top_exponents = {40.0};
+  m.bottom_roots = {{2.9, 0, 0, 0}};
+  m.bottom_exponents = {1e-9};
+  m.ln_C = 0.0;
+  EXPECT_NEAR(SurfaceSteepness(m), 40.0, 0.5);
+  // 10 % of the shape box's side (3 units): a band 0.3 wide, lambda = 2 / (0.3 * 40).
+  double lambda = 0;
+  const RationalMap d = WithDetail(m, 10.0, &lambda);
+  EXPECT_NEAR(lambda, 2.0 / (0.3 * 40.0), 0.02);
+  EXPECT_NEAR(SurfaceSteepness(d), 40.0 * lambda, 0.5);
+  for (const Vec3& p : Points(200, 9)) {
+    const double a = OneStepLogModulus(m, p), b = OneStepLogModulus(d, p);
+    EXPECT_EQ(a < 0, b < 0);
+    EXPECT_NEAR(b, lambda * a, 1e-9 * (1 + std::abs(a)));
+  }
+  // A band already wider than asked: the map as it is. Detail 0: the map as it is.
+  EXPECT_EQ(WithDetail(m, 1e-6, &lambda).tau, m.tau);
+  EXPECT_EQ(lambda, 1.0);
+  EXPECT_EQ(WithDetail(m, 0.0).ln_C, m.ln_C);
+  EXPECT_THROW(WithDetail(m, -1.0), Error);
+  EXPECT_THROW(WithDetail(m, std::nan("")), Error);
+  // The iteration map: detail, then the reference frame.
+  const RationalMap r = IterationMap(m, true, 10.0);
+  EXPECT_EQ(r.frame.fractal_radius, 4.0);
+  EXPECT_NEAR(r.tau, d.tau, 1e-15);
 }
 
 TEST(Julia, RotationIsRigid) {

@@ -66,9 +66,9 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
                   [](auto& o) -> std::string& { return o.iteration_frame; }, {"map", "reference"})
           .Number(
               "detail", "--detail",
-              "Fractal detail: the trap ball grows by this factor against the shape, the one-step set stays "
-              "(1: as optimized, smooth; 2-4: intricate)",
-              [](auto& o) -> double& { return o.detail; }, 0.0, 1e3, true)
+              "Fractal detail: the width of the band |L| < 1 about the surface, percent of the shape's size; the "
+              "one-step set stays (0: as optimized, smooth; 2: rough; 5: folds and flakes; docs/meshing.md)",
+              [](auto& o) -> double& { return o.detail; }, 0.0, 100.0)
           .Choice("frame", "--frame", "Coordinates of the output: user (the input mesh's) or fractal",
                   [](auto& o) -> std::string& { return o.frame; }, {"user", "fractal"})
           .Boolean("vdb", "", "Also write julia.vdb", [](auto& o) -> bool& { return o.vdb; })
@@ -113,15 +113,12 @@ bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& o, m
   return true;
 }
 
-RationalMap IterationMap(const RationalMap& map, const MeshStageOptions& o) {
-  if (o.iteration_frame == "map" && o.detail == 1.0) return map;
-  return InFrame(map, IterationFrame(map.frame, o.iteration_frame == "reference", o.detail));
-}
-
 MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& o, const Mesher& mesher) {
   if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
-  const RationalMap map = IterationMap(input_map, o);
   MeshStageResult r;
+  // IterationMap, keeping the exponents' factor for the summary.
+  RationalMap map = o.detail == 0.0 ? input_map : WithDetail(input_map, o.detail, &r.lambda);
+  if (o.iteration_frame == "reference") map = InFrame(map, ReferenceFrame(map.frame));
   r.frame = map.frame;
   r.meshing = o.meshing;
   mesh::MeshingOptions& m = r.meshing;
@@ -216,6 +213,7 @@ json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std:
                   {"iteration_frame",
                    {{"name", o.iteration_frame},
                     {"detail", o.detail},
+                    {"lambda", r.lambda},
                     {"fractal_radius", r.frame.fractal_radius},
                     {"origin", r.frame.origin}}},
                   {"box", {{"min", r.meshing.min_corner}, {"max", r.meshing.max_corner}}},

@@ -38,10 +38,9 @@ struct MeshStageOptions {
   // 1.41 / 0.54 / 1.07 are given). The one-step set is the same in both; the box and `translate`
   // are in this frame.
   std::string iteration_frame = "map";
-  // Fractal detail: the iteration frame's scale is divided by this (InFrame), so the trap ball
-  // grows by this factor against the shape while the one-step set stays (docs/meshing.md "Detail").
-  // 1: the set as optimized (smooth with the trap frame scale); larger: more intricate.
-  double detail = 1.0;
+  // Fractal detail (WithDetail, rational_map.h): the width of the band |L| < 1 about the one-step
+  // surface, percent of the shape's size; the one-step set stays. 0: the map as optimized.
+  double detail = 0.0;
   std::vector<std::string> vdb_grids{"surface", "density"};  // of the .vdb: surface, density, field
   double vdb_band = 3.0;                                     // half-width of the level set's narrow band, voxels
   bool ply_double = false;                                   // PLY coordinates as double
@@ -76,15 +75,12 @@ struct MeshStageResult {
   mesh::MeshingSummary summary;
   mesh::MeshingOptions meshing;  // as used (the box filled in)
   FractalFrame frame;            // the iteration frame (IterationMap): of the box and the fractal output
+  double lambda = 1.0;           // the factor of ln C, tau and beta for `detail` (WithDetail)
   JuliaOptions julia;            // as used (the placement's centre filled in)
   mesh::FieldBand band;          // with vdb grid "field"
   std::int64_t escaped = 0, non_finite = 0;
   bool empty() const { return mesh.triangles.empty(); }
 };
-
-// The map as the mesh stage iterates it: `map` in the iteration frame, its scale divided by
-// `detail`. The same map when both are at their defaults.
-RationalMap IterationMap(const RationalMap& map, const MeshStageOptions& options);
 
 // Meshes `map`'s Julia set. Throws quijibo::Error on invalid options.
 MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& options, const Mesher& mesher = LocalMesher);

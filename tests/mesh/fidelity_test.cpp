@@ -121,16 +121,17 @@ TEST(Fidelity, DetailKeepsTheOneStepSetAndChangesTheNStepSet) {
   m.bottom_roots = {{-1.2, 0.3, 0.1, 0}};
   m.bottom_exponents = {0.7};
   m.ln_C = 0.3;
+  m.tau = m.beta = 60, m.ln_C *= 60;  // steep: |L| leaves 0 fast across the surface
   FidelityOptions o;
   o.lattice = 40;
   o.julia.iterations = 4;
   const ScalarGrid target = SphereTarget(1.0);
   const Fidelity base = MeasureSets(m, target, o);
-  o.detail = 3.0;
+  o.detail = 20.0;
   const Fidelity more = MeasureSets(m, target, o);
   EXPECT_EQ(more.one_step.set_nodes, base.one_step.set_nodes);
   EXPECT_NE(more.n_step.set_nodes, base.n_step.set_nodes);
-  o.detail = 0.0;
+  o.detail = -1.0;
   EXPECT_THROW(MeasureSets(m, target, o), Error);
 }
 
