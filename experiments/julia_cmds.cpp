@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 #include "experiments/bind.h"
@@ -17,6 +18,7 @@
 #include "quijibo/child_process.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
+#include "quijibo/julia_batch.h"
 
 namespace quijibo::cli {
 
@@ -114,7 +116,7 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
               "A surface that does not cross the box is a result, not an error: write the summary (0 "
               "triangles) and no mesh files");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
-  a->j.add(c, {"resolution", "iterations", "escape", "iso", "iteration_frame", "detail", "frame", "precision"});
+  a->j.add(c, {"resolution", "iterations", "escape", "iso", "iteration_frame", "detail", "frame", "precision", "kernel"});
   c->callback([a, mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
     pipeline::CheckMeshFiles(a->files);
@@ -233,66 +235,102 @@ void AddPicture(CLI::App& app) {
   });
 }
 
-// bench mesh: each resolution in a child process, so that its peak RSS is its own (wait4).
+// bench mesh: each resolution and kernel in a child process, so that its peak RSS is its own (wait4).
 void AddBenchMesh(CLI::App& app) {
   CLI::App* bench = app.get_subcommand("bench");
   struct Args {
-    std::string map, resolutions = "256,512", out;
+    std::string map, resolutions = "256,512", kernels = "scalar,vector", out;
     int iterations = JuliaOptions{}.iterations;
   };
   auto a = std::make_shared<Args>();
   CLI::App* c = bench->add_subcommand(
-      "mesh", "Seconds and peak memory of `quijibo mesh` (sparse, double) at several resolutions");
+      "mesh", "Seconds, throughput and peak memory of `quijibo mesh` (sparse, double) at several resolutions, for "
+              "each iteration kernel");
   c->add_option("map", a->map, "map.json")->required();
   c->add_option("--resolutions", a->resolutions, "Comma-separated resolutions")->capture_default_str();
+  c->add_option("--kernel", a->kernels, "Comma-separated iteration kernels: scalar, vector")->capture_default_str();
   c->add_option("-n,--iterations", a->iterations, "Map applications n")->capture_default_str();
   c->add_option("--markdown", a->out, "Append the Markdown table to this file");
   c->callback([a] {
     const RationalMap map = ReadMap(a->map);
     std::vector<int> res;
     for (double r : ParseNumbers(a->resolutions, "--resolutions")) res.push_back(int(r));
+    std::vector<std::string> kernels;
+    {
+      std::stringstream s(a->kernels);
+      for (std::string k; std::getline(s, k, ',');) kernels.push_back(JuliaKernelName(ParseJuliaKernel(k)));
+      if (kernels.empty()) throw Error("--kernel: name at least one kernel");
+    }
     double load[3] = {0, 0, 0};
     if (::getloadavg(load, 3) < 0) load[0] = -1;
     char date[32];
     const std::time_t now = std::time(nullptr);
     std::strftime(date, sizeof date, "%Y-%m-%d", std::localtime(&now));
-    std::string md = "| resolution | n | seconds | peak RSS (MB) | vertices | triangles | node evals | bisection evals | "
-                     "tiles meshed/total |\n|---|---|---|---|---|---|---|---|---|\n";
+    const std::string isa = JuliaBatch(map, JuliaOptions{}).isa();
+    // Throughput: field evaluations (nodes and bisection) per wall second, and factor evaluations
+    // (one root's log, atan2, sin, cos and product) per wall second = map applications x roots.
+    std::string md = "| resolution | n | kernel | seconds | peak RSS (MB) | vertices | triangles | node evals | "
+                     "bisection evals | evals/s | root x iteration evals/s (M) | tiles meshed/total |\n"
+                     "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     json all = json::array();
     for (int r : res) {
-      const ChildResult child = ChildProcess([&]() -> std::string {
-        try {
-          pipeline::MeshStageOptions o;
-          o.meshing.resolution = r;
-          o.julia.iterations = a->iterations;
-          const mesh::MeshingSummary s = pipeline::MeshJulia(map, o).summary;
-          return json({{"seconds", s.seconds}, {"vertices", s.vertices}, {"triangles", s.triangles},
-                       {"nodes", s.nodes_evaluated}, {"bisection", s.bisection_evaluations},
-                       {"tiles_meshed", s.tiles_meshed}, {"tiles_total", s.tiles_total}})
-              .dump();
-        } catch (const std::exception& e) {
-          return json({{"error", e.what()}}).dump();
-        }
-      }).Wait();
-      if (child.out.empty()) throw Error("bench mesh: the case at resolution " + std::to_string(r) + " died");
-      json j = json::parse(child.out);
-      if (j.contains("error")) throw Error("bench mesh: " + j["error"].get<std::string>());
-      j["resolution"] = r;
-      j["peak_rss_mb"] = child.peak_rss_mb;
-      j["cpu_seconds"] = child.cpu_seconds;
-      all.push_back(j);
-      char row[512];
-      std::snprintf(row, sizeof row, "| %d^3 | %d | %.1f | %.0f | %lld | %lld | %lld | %lld | %lld/%lld |\n", r,
-                    a->iterations, j["seconds"].get<double>(), j["peak_rss_mb"].get<double>(),
-                    (long long)j["vertices"].get<std::int64_t>(), (long long)j["triangles"].get<std::int64_t>(),
-                    (long long)j["nodes"].get<std::int64_t>(), (long long)j["bisection"].get<std::int64_t>(),
-                    (long long)j["tiles_meshed"].get<std::int64_t>(), (long long)j["tiles_total"].get<std::int64_t>());
-      md += row;
-      std::fprintf(stderr, "%s", row);
+      std::map<std::string, double> rate;
+      for (const std::string& kernel : kernels) {
+        const ChildResult child = ChildProcess([&]() -> std::string {
+          try {
+            pipeline::MeshStageOptions o;
+            o.meshing.resolution = r;
+            o.julia.iterations = a->iterations;
+            o.kernel = kernel;
+            const pipeline::MeshStageResult m = pipeline::MeshJulia(map, o);
+            const mesh::MeshingSummary& s = m.summary;
+            return json({{"seconds", s.seconds}, {"vertices", s.vertices}, {"triangles", s.triangles},
+                         {"nodes", s.nodes_evaluated}, {"bisection", s.bisection_evaluations},
+                         {"search", s.search_evaluations}, {"following", s.follow_evaluations},
+                         {"escaped", m.escaped}, {"non_finite", m.non_finite},
+                         {"applications", m.applications}, {"factors", m.factors},
+                         {"tiles_meshed", s.tiles_meshed}, {"tiles_total", s.tiles_total}})
+                .dump();
+          } catch (const std::exception& e) {
+            return json({{"error", e.what()}}).dump();
+          }
+        }).Wait();
+        if (child.out.empty())
+          throw Error("bench mesh: the case at resolution " + std::to_string(r) + ", kernel " + kernel + " died");
+        json j = json::parse(child.out);
+        if (j.contains("error")) throw Error("bench mesh: " + j["error"].get<std::string>());
+        const double seconds = std::max(j["seconds"].get<double>(), 1e-9);
+        const double evals = double(j["nodes"].get<std::int64_t>() + j["bisection"].get<std::int64_t>());
+        j["resolution"] = r;
+        j["kernel"] = kernel;
+        j["peak_rss_mb"] = child.peak_rss_mb;
+        j["cpu_seconds"] = child.cpu_seconds;
+        j["evaluations_per_second"] = evals / seconds;
+        j["factor_evaluations_per_second"] =
+            double(j["applications"].get<std::int64_t>()) * double(j["factors"].get<std::size_t>()) / seconds;
+        rate[kernel] = j["factor_evaluations_per_second"].get<double>();
+        all.push_back(j);
+        char row[512];
+        std::snprintf(row, sizeof row, "| %d^3 | %d | %s | %.1f | %.0f | %lld | %lld | %lld | %lld | %.0f | %.1f | %lld/%lld |\n",
+                      r, a->iterations, kernel.c_str(), seconds, j["peak_rss_mb"].get<double>(),
+                      (long long)j["vertices"].get<std::int64_t>(), (long long)j["triangles"].get<std::int64_t>(),
+                      (long long)j["nodes"].get<std::int64_t>(), (long long)j["bisection"].get<std::int64_t>(),
+                      evals / seconds, rate[kernel] / 1e6, (long long)j["tiles_meshed"].get<std::int64_t>(),
+                      (long long)j["tiles_total"].get<std::int64_t>());
+        md += row;
+        std::fprintf(stderr, "%s", row);
+      }
+      if (rate.count("scalar") && rate.count("vector") && rate["scalar"] > 0) {
+        char line[128];
+        std::snprintf(line, sizeof line, "| %d^3 | | vector / scalar | | | | | | | | %.2fx | |\n", r,
+                      rate["vector"] / rate["scalar"]);
+        md += line;
+        std::fprintf(stderr, "%s", line);
+      }
     }
     const json doc = {{"benchmark", "mesh"}, {"date", date}, {"map", a->map},
                       {"cores", int(::sysconf(_SC_NPROCESSORS_ONLN))}, {"load_average_at_start", load[0]},
-                      {"results", all}};
+                      {"vector_isa", isa}, {"results", all}};
     if (!a->out.empty()) {
       std::string old;
       if (std::filesystem::exists(a->out)) old = ReadFile(a->out);

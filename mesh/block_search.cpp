@@ -40,7 +40,8 @@ void EvaluatePoints(const BatchField& field, const std::vector<Vec3>& points, st
 
 // The sparse search: returns the sorted ids of the active blocks of `block_cells`.
 std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOptions& o, int first_stride,
-                                       const Geometry& geo, Counters& counters, const PointsEvaluator& external) {
+                                       const Geometry& geo, Counters& counters, const PointsEvaluator& external,
+                                       NodeValues* finest) {
   const MeshLattice& l = geo.lattice;
   std::vector<std::int64_t> candidates;  // block ids at the current stride
   int stride = first_stride;
@@ -52,6 +53,11 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
   const double value_margin = o.search_value_margin >= 0 ? o.search_value_margin : field.value_margin;
   Progress progress("mesh: sparse search", 1.0, !o.show_progress);
   double done = 0.0;
+  // The previous level's nodes and values, sorted by node id: every corner of a coarse block is a
+  // corner of its children, so about one in eight nodes of a level is known already. A node's
+  // value does not depend on its batch, so reusing it changes nothing.
+  std::vector<std::int64_t> known_keys;
+  std::vector<double> known_values;
   for (;;) {
     const BlockGrid g = MakeBlocks(l, stride);
     // Corner nodes of the candidates.
@@ -65,14 +71,23 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
     }
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    std::vector<Vec3> points(keys.size());
-    for (std::size_t i = 0; i < keys.size(); ++i) {
-      const std::int64_t k = keys[i];
-      points[i] = l.node(k % geo.nodes[0], (k / geo.nodes[0]) % geo.nodes[1], k / (geo.nodes[0] * geo.nodes[1]));
+    std::vector<double> values(keys.size());
+    {
+      std::vector<std::size_t> fresh;  // indices into keys of the nodes not known yet
+      for (std::size_t i = 0; i < keys.size(); ++i) {
+        const auto it = std::lower_bound(known_keys.begin(), known_keys.end(), keys[i]);
+        if (it != known_keys.end() && *it == keys[i]) values[i] = known_values[std::size_t(it - known_keys.begin())];
+        else fresh.push_back(i);
+      }
+      std::vector<Vec3> points(fresh.size());
+      for (std::size_t i = 0; i < fresh.size(); ++i) {
+        const std::int64_t k = keys[fresh[i]];
+        points[i] = l.node(k % geo.nodes[0], (k / geo.nodes[0]) % geo.nodes[1], k / (geo.nodes[0] * geo.nodes[1]));
+      }
+      std::vector<double> fresh_values;
+      if (!points.empty()) EvaluatePoints(field, points, fresh_values, counters.search, counters, external);
+      for (std::size_t i = 0; i < fresh.size(); ++i) values[fresh[i]] = fresh_values[i];
     }
-    std::vector<double> values;
-    EvaluatePoints(field, points, values, counters.search, counters, external);
-    points = {};
     auto value_of = [&](std::int64_t key) {
       return values[std::size_t(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin())];
     };
@@ -111,6 +126,7 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
     progress.update(done, std::to_string(marked.size()) + " blocks of " + std::to_string(stride) + " cells");
     if (stride == o.block_cells) {
       progress.finish();
+      if (finest) finest->keys = std::move(keys), finest->values = std::move(values);
       return marked;
     }
     // Children at half the stride.
@@ -126,16 +142,21 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
     }
     std::sort(candidates.begin(), candidates.end());
     stride = half;
+    known_keys.swap(keys);
+    known_values.swap(values);
   }
 }
 
 std::int64_t FollowSurface(const BatchField& field, const MeshingOptions& o, const Geometry& geo,
-                           std::vector<std::int64_t>& active, Counters& counters, const PointsEvaluator& external) {
+                           std::vector<std::int64_t>& active, Counters& counters, const PointsEvaluator& external,
+                           const NodeValues* seed) {
   const MeshLattice& l = geo.lattice;
   const BlockGrid g = MakeBlocks(l, o.block_cells);
   const std::int64_t bc = o.block_cells;
   // Values of the face nodes seen so far (a face is shared by rounds and by neighbouring faces).
   std::unordered_map<std::int64_t, double> known;
+  if (seed)
+    for (std::size_t i = 0; i < seed->keys.size(); ++i) known.emplace(seed->keys[i], seed->values[i]);
   std::vector<std::int64_t> frontier = active;  // blocks whose faces are not checked yet
   std::int64_t added = 0;
   struct Face {

@@ -1,26 +1,51 @@
 #include "mesh/julia_field.h"
 
+#include <vector>
+
 namespace quijibo::mesh {
 
 BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, double iso, Precision precision,
-                          JuliaFieldStats* stats) {
+                          JuliaFieldStats* stats, JuliaKernel kernel) {
   BatchField field;
   field.iso = iso;
   field.value_margin = kLogModulusValueMargin;
-  DispatchPrecision(precision, [&]<class Real>() {
-    auto jm = std::make_shared<const JuliaMap<Real>>(map, options);
-    field.evaluate = [jm, stats](const Vec3* points, std::size_t n, double* values) {
-      std::int64_t escaped = 0, bad = 0;
+  if (precision == Precision::kDouble && kernel == JuliaKernel::kVector) {
+    auto jb = std::make_shared<const JuliaBatch>(map, options);
+    field.evaluate = [jb, stats](const Vec3* points, std::size_t n, double* values) {
+      std::vector<JuliaResult<double>> r(n);
+      jb->At(points, n, r.data());
+      std::int64_t escaped = 0, bad = 0, applications = 0;
       for (std::size_t i = 0; i < n; ++i) {
-        const JuliaResult<Real> r = jm->At(points[i]);
-        values[i] = ToDouble(r.log_modulus);
-        escaped += r.escaped;
+        values[i] = r[i].log_modulus;
+        escaped += r[i].escaped;
+        applications += r[i].iterations;
         bad += !std::isfinite(values[i]);
       }
       if (stats) {
         stats->evaluations += std::int64_t(n);
         stats->escaped += escaped;
         stats->non_finite += bad;
+        stats->applications += applications;
+      }
+    };
+    return field;
+  }
+  DispatchPrecision(precision, [&]<class Real>() {
+    auto jm = std::make_shared<const JuliaMap<Real>>(map, options);
+    field.evaluate = [jm, stats](const Vec3* points, std::size_t n, double* values) {
+      std::int64_t escaped = 0, bad = 0, applications = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const JuliaResult<Real> r = jm->At(points[i]);
+        values[i] = ToDouble(r.log_modulus);
+        escaped += r.escaped;
+        applications += r.iterations;
+        bad += !std::isfinite(values[i]);
+      }
+      if (stats) {
+        stats->evaluations += std::int64_t(n);
+        stats->escaped += escaped;
+        stats->non_finite += bad;
+        stats->applications += applications;
       }
     };
     return 0;

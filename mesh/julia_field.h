@@ -8,6 +8,7 @@
 
 #include "mesh/marching_cubes.h"
 #include "quijibo/julia.h"
+#include "quijibo/julia_batch.h"
 #include "quijibo/quaternion_map.h"
 #include "quijibo/real.h"
 
@@ -23,12 +24,15 @@ struct JuliaFieldStats {
   std::atomic<std::int64_t> evaluations{0};
   std::atomic<std::int64_t> escaped{0};     // stopped at the escape radius
   std::atomic<std::int64_t> non_finite{0};  // NaN or -inf log-modulus (a sample on a root)
+  std::atomic<std::int64_t> applications{0};  // map applications done (the sum of m)
 };
 
 // Throws quijibo::Error when the map or the options are invalid. `stats` may be null; it must
-// outlive the field.
+// outlive the field. In double precision `kernel` picks the vectorized kernel (JuliaBatch, the
+// default) or the scalar reference (JuliaMap); other precisions are always scalar.
 BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, double iso = 0.0,
-                          Precision precision = Precision::kDouble, JuliaFieldStats* stats = nullptr);
+                          Precision precision = Precision::kDouble, JuliaFieldStats* stats = nullptr,
+                          JuliaKernel kernel = JuliaKernel::kVector);
 
 // Any quaternion map's field log|q_n| (quijibo/quaternion_map.h) as a BatchField on points p:
 // q = [s p, 0] with s = `point_scale`; iso 0. `map` is shared by the field.

@@ -360,9 +360,10 @@ TilePlan PlanTiles(const BatchField& field, const MeshingOptions& o, const Point
   // Active blocks (sorted ids), or all of them.
   std::vector<std::int64_t> active_blocks;
   if (plan.sparse) {
-    active_blocks = SearchBlocks(field, o, stride, geo, counters, search_evaluate);
+    NodeValues finest;
+    active_blocks = SearchBlocks(field, o, stride, geo, counters, search_evaluate, &finest);
     if (o.follow_surface)
-      plan.blocks_followed = FollowSurface(field, o, geo, active_blocks, counters, search_evaluate);
+      plan.blocks_followed = FollowSurface(field, o, geo, active_blocks, counters, search_evaluate, &finest);
   }
   plan.follow_evaluations = counters.follow;
   plan.search_evaluations = counters.search + counters.follow;

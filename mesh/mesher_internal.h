@@ -61,16 +61,26 @@ inline BlockGrid MakeBlocks(const MeshLattice& l, int stride) {
   return g;
 }
 
+// Node ids (sorted) and their field values.
+struct NodeValues {
+  std::vector<std::int64_t> keys;
+  std::vector<double> values;
+};
+
 // The coarse-to-fine block search (block_search.cpp): the sorted ids of the blocks of
 // o.block_cells it keeps. `external` (optional) evaluates the search lattice instead of the field.
+// `finest` (optional) receives the values of the last level's nodes.
 std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOptions& o, int first_stride,
-                                       const Geometry& geo, Counters& counters, const PointsEvaluator& external);
+                                       const Geometry& geo, Counters& counters, const PointsEvaluator& external,
+                                       NodeValues* finest = nullptr);
 
 // Surface following (block_search.cpp): adds to `active` (sorted block ids of o.block_cells) every
 // block across a face of an active block on which the field changes sign, until none is added, so
 // that every piece of surface the active blocks touch is meshed whole. Returns how many it added.
+// `known` (optional): node values already evaluated (the search's), not evaluated again.
 std::int64_t FollowSurface(const BatchField& field, const MeshingOptions& o, const Geometry& geo,
-                           std::vector<std::int64_t>& active, Counters& counters, const PointsEvaluator& external);
+                           std::vector<std::int64_t>& active, Counters& counters, const PointsEvaluator& external,
+                           const NodeValues* known = nullptr);
 
 // Removes the components that enclose a single lattice node (lattice_mesh.cpp); `edges[v]` is vertex
 // v's edge id. Returns how many.

@@ -128,6 +128,14 @@ void JuliaMap<Real>::Apply(const Quaternion<Real>& q, const Real& q_log, const Q
 }
 
 template <class Real>
+std::vector<typename JuliaMap<Real>::Factor> JuliaMap<Real>::Factors() const {
+  std::vector<Factor> f;
+  for (std::size_t i = 0; i < top_.size(); ++i) f.push_back({top_[i], top_exp_[i], top_zero_[i] != 0});
+  for (std::size_t i = bottom_.size(); i-- > 0;) f.push_back({bottom_[i], -bottom_exp_[i], bottom_zero_[i] != 0});
+  return f;
+}
+
+template <class Real>
 JuliaResult<Real> JuliaMap<Real>::Iterate(const Quaternion<Real>& q0) const {
   using std::exp;
   using std::log;

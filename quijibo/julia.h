@@ -101,6 +101,19 @@ class JuliaMap {
   JuliaResult<Real> At(const Vec3& p) const { return Iterate(StartingPoint(p)); }
   const JuliaOptions& options() const { return options_; }
 
+  // One factor of R as Apply multiplies it in: its root (translated and scaled), its signed
+  // exponent (tau T_i for top roots, -beta B_i for bottom roots: the versor of Q^-b is conj(u(Q)^b)
+  // = u(Q)^-b) and whether the root is exactly at the origin. For batch kernels (julia_batch.h).
+  struct Factor {
+    Quaternion<Real> root;
+    Real exponent;
+    bool zero;
+  };
+  // The factors in Apply's order: top roots in order, then bottom roots last to first.
+  std::vector<Factor> Factors() const;
+  const Real& ln_C() const { return ln_C_; }
+  const Real& log_escape() const { return log_escape_; }
+
  private:
   JuliaOptions options_;
   std::vector<Quaternion<Real>> top_, bottom_;  // translated and scaled roots

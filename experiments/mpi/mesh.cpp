@@ -186,11 +186,15 @@ bool MpiMesher(const mesh::BatchField& field, const mesh::MeshingOptions& option
   }
   const double t_mesh = Now();
   // The field's counters, summed on rank 0.
-  std::int64_t local[3] = {0, 0, 0}, total[3] = {0, 0, 0};
-  if (stats) local[0] = stats->evaluations, local[1] = stats->escaped, local[2] = stats->non_finite;
-  MPI_Reduce(local, total, 3, MPI_INT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
+  std::int64_t local[4] = {0, 0, 0, 0}, total[4] = {0, 0, 0, 0};
+  if (stats)
+    local[0] = stats->evaluations, local[1] = stats->escaped, local[2] = stats->non_finite,
+    local[3] = stats->applications;
+  MPI_Reduce(local, total, 4, MPI_INT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
   if (rank != 0) return false;
-  if (stats) stats->evaluations = total[0], stats->escaped = total[1], stats->non_finite = total[2];
+  if (stats)
+    stats->evaluations = total[0], stats->escaped = total[1], stats->non_finite = total[2],
+    stats->applications = total[3];
   *mesh = mesh::WeldTilePieces(plan, pieces, summary, band);
   const double t_weld = Now();
   if (summary) summary->seconds = t_weld - t0;

@@ -76,6 +76,11 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
           .Choice(
               "precision", "--precision", "Iteration precision: float, double, long-double or float128",
               [](auto& o) -> std::string& { return o.precision; }, kPrecisionNames)
+          .Choice(
+              "kernel", "--kernel",
+              "Iteration kernel in double precision: vector (SIMD, glibc libmvec) or scalar (the reference); other "
+              "precisions are scalar",
+              [](auto& o) -> std::string& { return o.kernel; }, kJuliaKernelNames)
           .String("optimizer", "", "Which optimizer's map to mesh",
                   [](auto& o) -> std::string& { return o.optimizer; });
   return s;
@@ -140,11 +145,14 @@ MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& 
   }
   if (auto why = r.julia.validate(); !why.empty()) throw Error(why);
   mesh::JuliaFieldStats stats;
-  const mesh::BatchField field = mesh::MakeJuliaField(map, r.julia, o.iso, ParsePrecision(o.precision), &stats);
+  const mesh::BatchField field = mesh::MakeJuliaField(map, r.julia, o.iso, ParsePrecision(o.precision), &stats,
+                                                       ParseJuliaKernel(o.kernel));
   const bool want_band = Wants(o, "field");
   r.writer = mesher(field, m, &r.summary, want_band ? &r.band : nullptr, &r.mesh, &stats);
   r.escaped = stats.escaped;
   r.non_finite = stats.non_finite;
+  r.applications = stats.applications;
+  r.factors = JuliaMap<double>(map, r.julia).Factors().size();
   // From the box coordinates the mesher used to the fractal frame (rotation), then the user frame.
   const bool rotate = !r.julia.placement.is_identity(), user = o.frame == "user";
   for (Vec3& v : r.mesh.vertices) {
@@ -216,6 +224,7 @@ json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std:
                     {"lambda", r.lambda},
                     {"fractal_radius", r.frame.fractal_radius},
                     {"origin", r.frame.origin}}},
+                  {"kernel", o.precision == "double" ? o.kernel : std::string("scalar")},
                   {"box", {{"min", r.meshing.min_corner}, {"max", r.meshing.max_corner}}},
                   {"resolution", r.meshing.resolution},
                   {"cells", s.cells},
@@ -225,6 +234,7 @@ json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std:
   summary["boundary_edges"] = topo.boundary_edges;  // = open_edges (kept for older readers)
   summary["non_manifold_edges"] = topo.non_manifold_edges;
   summary["evaluations"]["escaped"] = r.escaped;
+  summary["evaluations"]["applications"] = r.applications;
   return summary;
 }
 

@@ -25,6 +25,7 @@ struct MeshStageOptions {
   double iso = 0.0;              // the surface log|q_n| = iso
   std::string frame = "user";    // coordinates of the output: "user" (the input mesh's) or "fractal"
   std::string precision = "double";
+  std::string kernel = "vector";  // double precision: the vectorized kernel or the scalar reference (julia_batch.h)
   // The box in the fractal frame, xmin,ymin,zmin,xmax,ymax,zmax; empty: the whole normalized cube
   // (the map's box centre +- fractal_radius / 2).
   std::vector<double> box;
@@ -79,6 +80,8 @@ struct MeshStageResult {
   JuliaOptions julia;            // as used (the placement's centre filled in)
   mesh::FieldBand band;          // with vdb grid "field"
   std::int64_t escaped = 0, non_finite = 0;
+  std::int64_t applications = 0;  // map applications done, all field evaluations together
+  std::size_t factors = 0;        // roots with a non-zero exponent (one factor each per application)
   bool empty() const { return mesh.triangles.empty(); }
 };
 
