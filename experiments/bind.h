@@ -55,6 +55,8 @@ void BindSettings(CLI::App* c, O& o, const std::vector<std::string>& keys = {}) 
         opt = c->add_option_function<std::vector<double>>(
             s.flag, [target, set](const std::vector<double>& v) { set(*target, nlohmann::json(v)); }, s.help);
         if (s.sizes.size() == 1) opt->expected(s.sizes[0]);
+        if (s.sizes.size() > 1) opt->expected(s.sizes.front(), s.sizes.back());
+        opt->delimiter(',');  // "x,y,z" as well as "x y z"
         break;
       default:
         opt = c->add_option_function<std::string>(
