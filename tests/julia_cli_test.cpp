@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 namespace quijibo {
@@ -53,6 +54,32 @@ TEST_F(JuliaCli, MeshWritesPlyObjVdbAndASummary) {
   const double agreement = nlohmann::json::parse(s.out)["agreement"].get<double>();
   EXPECT_GT(agreement, 0.0);
   EXPECT_LE(agreement, 1.0);
+}
+
+TEST_F(JuliaCli, DetailAndTheReferenceFrameAreRecordedAndChangeOnlyTheNStepSet) {
+  // A steep map (exponents x 60) whose one-step set is its n-step set; --detail widens the band.
+  auto m = nlohmann::json::parse(std::ifstream(Path("map.json")));
+  m["tau"] = m["tau"].get<double>() * 60, m["beta"] = m["beta"].get<double>() * 60, m["ln_C"] = m["ln_C"].get<double>() * 60;
+  std::ofstream(Path("steep.json")) << m.dump();
+  auto mesh = [&](const std::string& extra, const std::string& out) {
+    const CommandResult r = RunQuijibo("mesh " + Path("steep.json") + " -o " + Path(out) + " -r 32 --frame fractal " + extra);
+    EXPECT_EQ(r.code, 0) << r.out;
+    return nlohmann::json::parse(r.out);
+  };
+  const auto one = mesh("-n 1", "one.ply"), one_d = mesh("-n 1 --detail 20", "one_d.ply");
+  EXPECT_EQ(one["triangles"], one_d["triangles"]);  // the one-step set stays
+  const auto four = mesh("-n 4", "four.ply"), four_d = mesh("-n 4 --detail 20", "four_d.ply");
+  EXPECT_NE(four["triangles"], four_d["triangles"]);
+  EXPECT_EQ(four_d["iteration_frame"]["detail"].get<double>(), 20.0);
+  EXPECT_LT(four_d["iteration_frame"]["lambda"].get<double>(), 1.0);
+  const auto ref = mesh("-n 2 --iteration-frame reference --translate 0,0,0.1", "ref.ply");
+  EXPECT_EQ(ref["iteration_frame"]["name"], "reference");
+  EXPECT_EQ(ref["iteration_frame"]["fractal_radius"].get<double>(), 4.0);
+  EXPECT_EQ(ref["julia"]["root_translation"][2].get<double>(), 0.1);
+  // Out of range: one line, no output.
+  const CommandResult bad = RunQuijibo("mesh " + Path("steep.json") + " -o " + Path("bad.ply") + " --detail -1");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_FALSE(Exists("bad.ply"));
 }
 
 TEST_F(JuliaCli, BadInputFailsWithOneLineAndNoOutput) {
