@@ -9,7 +9,9 @@
 #include "quijibo/error.h"
 
 // glibc's math-vector.h declares libmvec's variants only under -ffast-math (which would also drop
-// NaN and signed-zero semantics); these declarations give GCC the same variants without it.
+// NaN and signed-zero semantics); these declarations give GCC the same variants without it. Clang
+// (the fuzz build) has no such attribute: there the loops call the scalar functions.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 extern "C" {
 __attribute__((simd("notinbranch"))) double log(double) noexcept;
 __attribute__((simd("notinbranch"))) double exp(double) noexcept;
@@ -17,6 +19,7 @@ __attribute__((simd("notinbranch"))) double sin(double) noexcept;
 __attribute__((simd("notinbranch"))) double cos(double) noexcept;
 __attribute__((simd("notinbranch"))) double atan2(double, double) noexcept;
 }
+#endif
 
 namespace quijibo {
 
@@ -110,12 +113,17 @@ template <bool kZero>
 // The same code for the x86-64 baseline (libmvec's _ZGVbN2 variants) and for AVX2 + FMA
 // (_ZGVdN4), chosen at run time: the baseline never executes an instruction an old CPU lacks.
 void ApplySse2(const Stream& f, Lanes& s) { ApplyBody(f, s); }
+#if defined(__x86_64__)
 __attribute__((target("avx2,fma"))) void ApplyAvx2(const Stream& f, Lanes& s) { ApplyBody(f, s); }
 
 bool CpuHasAvx2() {
   __builtin_cpu_init();
   return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 }
+#else
+void ApplyAvx2(const Stream& f, Lanes& s) { ApplyBody(f, s); }
+bool CpuHasAvx2() { return false; }
+#endif
 
 }  // namespace
 

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 
 namespace quijibo {
@@ -104,6 +105,37 @@ TEST_F(JuliaCli, BadInputFailsWithOneLineAndNoOutput) {
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
   }
   EXPECT_FALSE(Exists("a.ply") || Exists("a.stl") || Exists("a.png"));
+}
+
+// --kernel: the vector and the scalar kernels write the same PLY; `bench mesh` runs both and
+// reports their throughput.
+TEST_F(JuliaCli, KernelsGiveTheSameMeshAndBenchReportsBoth) {
+  for (const char* k : {"vector", "scalar"}) {
+    const CommandResult r = RunQuijibo("mesh " + Path("map.json") + " -o " + Path(std::string(k) + ".ply") +
+                                       " -r 24 -n 2 --kernel " + k);
+    ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["kernel"], k);
+  }
+  std::ifstream a(Path("vector.ply"), std::ios::binary), b(Path("scalar.ply"), std::ios::binary);
+  const std::string va((std::istreambuf_iterator<char>(a)), {}), sc((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_GT(va.size(), 1000u);
+  EXPECT_EQ(va, sc);
+  EXPECT_NE(RunQuijibo("mesh " + Path("map.json") + " -o " + Path("x.ply") + " --kernel simd").code, 0);
+
+  const CommandResult r = RunQuijibo("bench mesh " + Path("map.json") + " --resolutions 16 -n 2 --markdown " +
+                                     Path("bench.md"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out.substr(r.out.find("{\n")));
+  ASSERT_EQ(j["results"].size(), 2u);
+  EXPECT_EQ(j["results"][0]["kernel"], "scalar");
+  EXPECT_EQ(j["results"][1]["kernel"], "vector");
+  EXPECT_EQ(j["results"][0]["triangles"], j["results"][1]["triangles"]);
+  for (const auto& c : j["results"]) {
+    EXPECT_GT(c["factor_evaluations_per_second"].get<double>(), 0) << c;
+    EXPECT_GT(c["peak_rss_mb"].get<double>(), 0) << c;
+  }
+  EXPECT_TRUE(j.contains("vector_isa"));
+  EXPECT_TRUE(Exists("bench.md"));
 }
 
 }  // namespace
