@@ -27,6 +27,7 @@ void AddRunCommand(CLI::App& app) {
   c->callback([a] {
     if (a->run.quiet) Progress::globally_quiet() = true;
     a->run.quiet = Progress::globally_quiet();
+    a->run.handle_signals = true;
     const pipeline::Experiment e = pipeline::Experiment::FromFile(a->experiment);
     const pipeline::RunSummary s = pipeline::RunExperiment(e, a->run);
     if (a->run.check_only) std::printf("%s\n", s.resolved.dump(2).c_str());
