@@ -43,6 +43,7 @@ void AddFidelityOptions(CLI::App* c, mesh::FidelityOptions& o) {
 
 mesh::Fidelity Measure(const FidelityArgs& a) {
   const RationalMap map = ReadMap(a.map);
+  mesh::CheckSameFrame(map.frame, a.map, a.target);
   const ScalarGrid target = ReadGrid(a.target);
   mesh::Fidelity f = mesh::MeasureSets(map, target, a.o);
   if (!a.julia_mesh.empty() || !a.shape_mesh.empty()) {

@@ -355,4 +355,111 @@ TEST(RunTest, KilledAndResumedRunMatchesAnUninterruptedOne) {
   fs::remove_all(dir);
 }
 
+namespace interrupt {
+
+// Every folder of a stage in `out` was made by the run recorded in run.json (or is the optimization
+// that run left for --resume), and no "<stage>.partial" is left.
+void ExpectOnlyThisRunsStages(const std::string& out) {
+  const json run = RunRecord(out);
+  std::vector<std::string> hashes;
+  for (const json& s : run["stages"]) hashes.push_back(s["hash"]);
+  for (const auto& e : fs::directory_iterator(out)) {
+    const std::string p = e.path().string();
+    EXPECT_EQ(p.find(".partial"), std::string::npos) << p;
+    if (!fs::exists(p + "/stage.json")) continue;
+    const std::string h = json::parse(Slurp(p + "/stage.json"))["hash"];
+    EXPECT_NE(std::find(hashes.begin(), hashes.end(), h), hashes.end()) << p << " predates the run";
+  }
+}
+
+// The one line of an interrupted run: the stage, the signal and the command that resumes it.
+void ExpectInterruptLine(const std::string& err, const std::string& stage) {
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_EQ(err.rfind("quijibo: interrupted (SIGINT) in stage " + stage, 0), 0u) << err;
+  EXPECT_NE(err.find("--resume"), std::string::npos) << err;
+}
+
+}  // namespace interrupt
+
+// Ctrl-C in each stage of a run whose settings changed (QUIJIBO_TEST_SIGNAL_IN_STAGE sends the
+// SIGINT as the stage starts computing): exit 130, one line, report.md and run.json INCOMPLETE
+// naming the stage, and nothing of the earlier run's later stages left to pass for this run's.
+TEST(RunTest, AnInterruptInEachStageLeavesAnIncompleteReportAndNoStaleOutputs) {
+  const std::string dir = TempDir("interrupt");
+  const std::string exp = dir + "/tiny.json", base = dir + "/base";
+  Write(exp, Tiny().dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", base, "--quiet"}, &err), 0) << err;
+  json changed = Tiny();
+  changed["initial"]["root_radius"] = 1.1;  // every stage computes again
+  Write(exp, changed.dump(1));
+  std::vector<std::string> stages = {"initial", "optimized", "mesh", "pictures"};
+  if (HaveGnuplot()) stages.insert(stages.begin() + 2, "plot");
+  for (std::size_t k = 0; k < stages.size(); ++k) {
+    const std::string& stage = stages[k];
+    const std::string out = dir + "/" + stage;
+    fs::copy(base, out, fs::copy_options::recursive);
+    EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err, nullptr, 0, "QUIJIBO_TEST_SIGNAL_IN_STAGE=" + stage),
+              130)
+        << stage << ": " << err;
+    interrupt::ExpectInterruptLine(err, stage == "optimized" ? "optimize (optimized" : stage);
+    const std::string report = Slurp(out + "/report.md");
+    EXPECT_EQ(report.rfind("# tiny (INCOMPLETE)", 0), 0u) << stage << ": " << report;
+    EXPECT_NE(report.find("**INCOMPLETE:** the run stopped in stage"), std::string::npos) << report;
+    EXPECT_NE(report.find("interrupted (SIGINT)"), std::string::npos) << report;
+    EXPECT_NE(report.find("quijibo run " + exp + " --out " + out + " --resume"), std::string::npos) << report;
+    const json run = RunRecord(out);
+    EXPECT_EQ(run["complete"], false) << run;
+    EXPECT_EQ(run["stopped"]["reason"], "interrupted (SIGINT)") << run;
+    EXPECT_EQ(run["stages"].size(), k) << run;  // the stages before it finished
+    for (std::size_t later = k; later < stages.size(); ++later)
+      EXPECT_FALSE(fs::exists(out + "/" + stages[later] + "/stage.json")) << stage << ": " << stages[later];
+    interrupt::ExpectOnlyThisRunsStages(out);
+  }
+  // Resumed, the run finishes and the report is whole again.
+  ASSERT_EQ(RunQ({"run", exp, "--out", dir + "/mesh", "--resume", "--quiet"}, &err), 0) << err;
+  EXPECT_EQ(Slurp(dir + "/mesh/report.md").find("INCOMPLETE"), std::string::npos);
+  EXPECT_EQ(RunRecord(dir + "/mesh")["complete"], true);
+  EXPECT_TRUE(fs::exists(dir + "/mesh/pictures/render.png"));
+  // Interrupted before any stage finished, a results folder the run created goes again.
+  EXPECT_EQ(RunQ({"run", exp, "--out", dir + "/fresh", "--quiet"}, &err, nullptr, 0,
+                 "QUIJIBO_TEST_SIGNAL_IN_STAGE=initial"),
+            130)
+      << err;
+  EXPECT_FALSE(fs::exists(dir + "/fresh")) << err;
+  fs::remove_all(dir);
+}
+
+// Ctrl-C inside the optimization (QUIJIBO_TEST_SIGNAL_AFTER_STEP): the optimizer writes its
+// checkpoint, the run exits 130 with one line, the report names no map that is not there, and
+// --resume continues from the checkpoint.
+TEST(RunTest, AnInterruptedOptimizationKeepsItsCheckpointAndSaysSo) {
+  const std::string dir = TempDir("interrupt_opt");
+  const std::string exp = dir + "/tiny.json", out = dir + "/results";
+  Write(exp, Tiny().dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  json changed = Tiny();
+  changed["optimizer"]["max_iterations"]["F"] = 14;  // the optimization and what follows compute again
+  Write(exp, changed.dump(1));
+  EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err, nullptr, 0, "QUIJIBO_TEST_SIGNAL_AFTER_STEP=3"), 130)
+      << err;
+  const std::string line = err.substr(err.rfind("quijibo: "));  // after the optimizer's table
+  interrupt::ExpectInterruptLine(line, "optimize (optimized");
+  EXPECT_TRUE(fs::exists(out + "/optimized/checkpoint.json"));
+  EXPECT_FALSE(fs::exists(out + "/optimized/map.json"));
+  for (const char* gone : {"mesh", "pictures", "plot"}) EXPECT_FALSE(fs::exists(out + "/" + gone)) << gone;
+  const std::string report = Slurp(out + "/report.md");
+  EXPECT_EQ(report.rfind("# tiny (INCOMPLETE)", 0), 0u) << report;
+  EXPECT_EQ(report.find("optimized/map.json"), std::string::npos) << report;
+  EXPECT_NE(report.find("optimized/checkpoint.json"), std::string::npos) << report;
+  interrupt::ExpectOnlyThisRunsStages(out);
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--resume", "--quiet"}, &err), 0) << err;
+  bool resumed = false;
+  for (const json& s : json(RunRecord(out)["stages"])) resumed |= s["status"] == "resumed";
+  EXPECT_TRUE(resumed) << RunRecord(out).dump();
+  EXPECT_EQ(Slurp(out + "/report.md").find("INCOMPLETE"), std::string::npos);
+  fs::remove_all(dir);
+}
+
 }  // namespace

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "experiments/pipeline/quality.h"
 #include "experiments/pipeline/run.h"
 #include "quijibo/io.h"
 #include "quijibo/rational_map.h"
@@ -39,6 +40,7 @@ std::string RunReport(const Experiment& e, const std::vector<StageRecord>& recor
   if (!e.description.empty()) md << e.description << "\n\n";
   md << "Experiment `" << e.path << "` (resolved: `experiment.resolved.json`), method " << e.method << ", run " << date
      << ", " << Fixed(total_seconds, 1) << " s " << (incomplete ? "so far" : "in all") << ".\n\n";
+  md << QualitySection(RunQuality(e, results));  // first: what the figures below are worth
   auto exists = [&](const std::string& rel) { return fs::exists(P(rel)); };
   auto image = [&](const std::string& rel, const std::string& caption) {
     if (exists(rel)) md << "![" << caption << "](" << rel << ")\n\n*" << caption << "* (`" << rel << "`)\n\n";

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "experiments/pipeline/plot.h"
+#include "experiments/pipeline/quality.h"
 #include "mesh/sdf_command.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
@@ -139,12 +140,14 @@ class Runner {
     }
     if (!quiet_) std::fprintf(stderr, "quijibo: [%d/%d] %s\n", index_, total_, what.c_str());
   }
-  // A stage is about to compute: what read its output earlier no longer matches it, so the
-  // stages downstream lose their folders now, and the run says INCOMPLETE until it ends.
+  // A stage is about to compute: its earlier output is not this run's, and what read it no longer
+  // matches, so the stage and the stages downstream lose their folders now (the optimization keeps
+  // its own, the checkpoint of --resume), and the run says INCOMPLETE until it ends.
   void Computing(const std::string& folder) {
     const std::lock_guard<std::mutex> lock(mu_);
     computing_ = folder;
     std::error_code ec;
+    if (!in_place_.count(folder)) fs::remove_all(P(folder), ec);
     for (const std::string& d : downstream_[folder]) {
       fs::remove_all(P(d), ec);
       fs::remove_all(P(d + ".partial"), ec);
@@ -192,6 +195,7 @@ class Runner {
     for (const auto& r : records)
       run["stages"].push_back({{"stage", r.name}, {"status", r.status}, {"seconds", r.seconds}, {"hash", r.hash}});
     run["complete"] = state == nullptr;
+    if (json q = RunQuality(e_, results_); !q.is_null()) run["quality"] = q;
     if (state) run["stopped"] = {{"stage", state->stopped_in}, {"reason", state->reason}, {"resume", state->resume}};
     return run;
   }
@@ -266,12 +270,13 @@ void Runner::Quijibo() {
   const TargetOptions& t = *e_.target;
   const InitialGuessStageOptions& in = e_.initial;
   const bool plot = e_.outputs.plot;
-  total_ = 1 + int(e_.optimizers.size()) + (plot ? 1 : 0) + (e_.mesh.enabled ? 1 : 0) + (e_.pictures.enabled ? 1 : 0);
-  downstream_["initial"] = {"plot", "mesh", "pictures"};
+  total_ = 2 + int(e_.optimizers.size()) + (plot ? 1 : 0) + (e_.mesh.enabled ? 1 : 0) + (e_.pictures.enabled ? 1 : 0);
+  downstream_["initial"] = {"plot", "mesh", "pictures", "fidelity"};
   for (const OptimizeStageOptions& o : e_.optimizers) {
     downstream_["initial"].push_back(o.name);
     downstream_[o.name] = {"plot"};
-    if (o.name == e_.chosen_optimizer().name) downstream_[o.name].insert(downstream_[o.name].end(), {"mesh", "pictures"});
+    if (o.name == e_.chosen_optimizer().name)
+      downstream_[o.name].insert(downstream_[o.name].end(), {"mesh", "pictures", "fidelity"});
     in_place_[o.name] = true;
   }
   downstream_["mesh"] = {"pictures"};
@@ -358,6 +363,18 @@ void Runner::Quijibo() {
                  Pictures(e_.pictures, ReadMap(P("initial/map.json")), ReadMap(map_path), P("initial/target.qgrid"),
                           has_mesh ? P("mesh/julia.ply") : "", dir);
                });
+
+  // 6. fidelity: the figures and the start check behind report.md's Quality section (quality.h),
+  // at the n and iso of the mesh.
+  const double alpha = chosen.optimizer.energy.alpha;
+  cache_.Run("fidelity", "fidelity",
+             {{"julia", JuliaJson(e_.mesh.julia, e_.mesh.iso, "double")}, {"alpha", alpha},
+              {"lattice", mesh::FidelityOptions().lattice}},
+             {}, {initial_hash, chosen_hash}, [&](const std::string& dir) {
+               const json q = MeasureQuality(ReadMap(P("initial/map.json")), ReadMap(map_path),
+                                             ReadGrid(P("initial/target.qgrid")), e_.mesh.julia, e_.mesh.iso, alpha);
+               WriteFileAtomically(dir + "/fidelity.json", q.dump(1) + "\n");
+             });
 }
 
 void Runner::RenderStage(const std::string& mesh, const std::string& upstream) {
