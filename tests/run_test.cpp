@@ -14,6 +14,7 @@
 #include <fcntl.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -459,6 +460,116 @@ TEST(RunTest, AnInterruptedOptimizationKeepsItsCheckpointAndSaysSo) {
   for (const json& s : json(RunRecord(out)["stages"])) resumed |= s["status"] == "resumed";
   EXPECT_TRUE(resumed) << RunRecord(out).dump();
   EXPECT_EQ(Slurp(out + "/report.md").find("INCOMPLETE"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+namespace quality {
+
+// An experiment that keeps the initial map (`map` file) as the result: passes that cannot move
+// (tolerance 1e9, as in PassesThatCannotMoveAreReportedNotFatal) on an analytic target.
+json Kept(const std::string& target, const std::string& map, int n) {
+  return {{"name", "kept"},
+          {"target", {{"analytic", target}, {"resolution", 16}}},
+          {"initial", {{"kind", "map"}, {"map", map}}},
+          {"optimizer",
+           {{"schedule", json::parse(R"({"levels": [{"resolution": 10, "passes": [{"kind": "V", "tolerance": 1e9}]}]})")},
+            {"min_level_fidelity", 0}}},
+          {"mesh", {{"resolution", 16}, {"iterations", n}}},
+          {"pictures", {{"enabled", false}}},
+          {"outputs", {{"plot", false}}}};
+}
+
+// A map of one root at the origin: R(q) = C q^{+-1}.
+std::string OneRootMap(bool top, double ln_C) {
+  const json root = json::array({json{{"root", {0.0, 0.0, 0.0, 0.0}}, {"exponent", 1.0}}});
+  return json{{"format", "quijibo-map"}, {"version", 1}, {"ln_C", ln_C}, {"tau", 1.0}, {"beta", 1.0},
+              {"top", top ? root : json::array()}, {"bottom", top ? json::array() : root}}
+      .dump(1);
+}
+
+// The warnings of run.json, all in one string, and checks that report.md states each of them.
+std::string Warnings(const std::string& out) {
+  const json run = RunRecord(out);
+  std::string all;
+  const std::string report = Slurp(out + "/report.md");
+  EXPECT_NE(report.find("## Quality"), std::string::npos) << report;
+  for (const json& w : run["quality"]["warnings"]) {
+    all += w.get<std::string>() + "\n";
+    EXPECT_NE(report.find("**Warning:** " + w.get<std::string>()), std::string::npos) << w;
+  }
+  return all;
+}
+
+}  // namespace quality
+
+// The exact one-step sphere (R = q, the unit ball) meshed at n = 1: the figures are in report.md
+// and run.json, and no threshold fires on a good result.
+TEST(RunTest, AGoodResultIsReportedWithItsFiguresAndNoWarning) {
+  const std::string dir = TempDir("quality_good");
+  Write(dir + "/map.json", quality::OneRootMap(true, 0.0));
+  Write(dir + "/e.json", quality::Kept("sphere", "map.json", 1).dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", dir + "/e.json", "--out", dir + "/r", "--quiet"}, &err), 0) << err;
+  const json q = RunRecord(dir + "/r")["quality"];
+  EXPECT_GT(q["figures"]["one_step"]["iou"].get<double>(), 0.9) << q;
+  EXPECT_EQ(q["figures"]["one_step"]["leak"], 0.0) << q;
+  EXPECT_EQ(q["figures"]["n_step"]["n"], 1) << q;
+  EXPECT_EQ(q["figures"]["mesh"]["components"], 1) << q;
+  EXPECT_EQ(q["figures"]["mesh"]["open_edges_inside"], 0) << q;
+  EXPECT_EQ(q["figures"]["start"]["inverted"], false) << q;
+  EXPECT_EQ(quality::Warnings(dir + "/r"), "");
+  EXPECT_NE(Slurp(dir + "/r/report.md").find("No warning."), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// R = C / q with ln C = -50 on the torus: |R| < 1 almost everywhere, so the one-step and n = 2 sets
+// fill the box and leak far beyond the shape box, L falls outward (inverted) and tanh is flat
+// everywhere (saturated): each of these is a warning, in run.json and report.md.
+TEST(RunTest, ASetThatFillsTheBoxFromAnInvertedSaturatedStartIsWarnedAbout) {
+  const std::string dir = TempDir("quality_bad");
+  Write(dir + "/map.json", quality::OneRootMap(false, -50.0));
+  Write(dir + "/e.json", quality::Kept("torus", "map.json", 2).dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", dir + "/e.json", "--out", dir + "/r", "--quiet"}, &err), 0) << err;
+  const std::string w = quality::Warnings(dir + "/r");
+  for (const char* expect : {"the one-step set leaks", "the n = 2 set fills the box", "the n = 2 set leaks",
+                             "the start is inverted", "the start is saturated",
+                             "one-step set does not follow the shape"})
+    EXPECT_NE(w.find(expect), std::string::npos) << expect << " in\n" << w;
+  fs::remove_all(dir);
+}
+
+// The shape modulus of a torus (64 triangles): the iteration's origin, the box centre, lies in the
+// hole, outside the shape; the run warns on stderr, in run.json and in report.md.
+TEST(RunTest, AShapeModulusWhoseOriginIsOutsideTheShapeIsWarnedAbout) {
+  const std::string dir = TempDir("quality_modulus");
+  std::ostringstream obj;
+  const int u = 8, v = 4;  // 8 x 4 quads, 64 triangles
+  const double pi = 3.14159265358979323846;
+  for (int i = 0; i < u; ++i)
+    for (int j = 0; j < v; ++j) {
+      const double a = 2 * pi * i / u, b = 2 * pi * j / v, r = 1.0 + 0.35 * std::cos(b);
+      obj << "v " << r * std::cos(a) << " " << r * std::sin(a) << " " << 0.35 * std::sin(b) << "\n";
+    }
+  auto id = [&](int i, int j) { return (i % u) * v + (j % v) + 1; };
+  for (int i = 0; i < u; ++i)
+    for (int j = 0; j < v; ++j) {
+      obj << "f " << id(i, j) << " " << id(i + 1, j) << " " << id(i + 1, j + 1) << "\n";
+      obj << "f " << id(i, j) << " " << id(i + 1, j + 1) << " " << id(i, j + 1) << "\n";
+    }
+  Write(dir + "/torus.obj", obj.str());
+  const json e = {{"name", "torus-modulus"},
+                  {"method", "modulus"},
+                  {"target", {{"mesh", "torus.obj"}}},
+                  {"modulus", {{"sdf_resolution", 24}, {"output", {{"format", "ply"}, {"resolution", 24}, {"iterations", 2}}}}},
+                  {"pictures", {{"enabled", false}}}};
+  Write(dir + "/e.json", e.dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", dir + "/e.json", "--out", dir + "/r", "--quiet"}, &err), 0) << err;
+  EXPECT_NE(err.find("quijibo: warning: the iteration's origin lies outside the shape"), std::string::npos) << err;
+  const json q = RunRecord(dir + "/r")["quality"];
+  EXPECT_EQ(q["figures"]["origin"]["inside"], false) << q;
+  EXPECT_NE(quality::Warnings(dir + "/r").find("origin lies outside the shape"), std::string::npos);
   fs::remove_all(dir);
 }
 
