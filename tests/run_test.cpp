@@ -522,17 +522,18 @@ TEST(RunTest, AGoodResultIsReportedWithItsFiguresAndNoWarning) {
   fs::remove_all(dir);
 }
 
-// R = C / q with ln C = -50 on the torus: |R| < 1 almost everywhere, so the one-step and n = 2 sets
-// fill the box and leak far beyond the shape box, L falls outward (inverted) and tanh is flat
-// everywhere (saturated): each of these is a warning, in run.json and report.md.
+// R = C / q with ln C = -50 on the torus: |R| < 1 almost everywhere, so the one-step set and the
+// n = 3 set (q_2 = q, q_3 = C / q) fill the box and leak far beyond the shape box, L falls outward
+// (inverted) and tanh is flat everywhere (saturated): each of these is a warning, in run.json and
+// report.md.
 TEST(RunTest, ASetThatFillsTheBoxFromAnInvertedSaturatedStartIsWarnedAbout) {
   const std::string dir = TempDir("quality_bad");
   Write(dir + "/map.json", quality::OneRootMap(false, -50.0));
-  Write(dir + "/e.json", quality::Kept("torus", "map.json", 2).dump(1));
+  Write(dir + "/e.json", quality::Kept("torus", "map.json", 3).dump(1));
   std::string err;
   ASSERT_EQ(RunQ({"run", dir + "/e.json", "--out", dir + "/r", "--quiet"}, &err), 0) << err;
   const std::string w = quality::Warnings(dir + "/r");
-  for (const char* expect : {"the one-step set leaks", "the n = 2 set fills the box", "the n = 2 set leaks",
+  for (const char* expect : {"the one-step set leaks", "the n = 3 set fills the box", "the n = 3 set leaks",
                              "the start is inverted", "the start is saturated",
                              "one-step set does not follow the shape"})
     EXPECT_NE(w.find(expect), std::string::npos) << expect << " in\n" << w;

@@ -22,15 +22,21 @@ std::string Decimals(double x, int digits) {
 }  // namespace
 
 json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const ScalarGrid& target,
-                    const JuliaOptions& julia, double iso, double alpha, const mesh::FidelityOptions& lattice) {
-  mesh::FidelityOptions o = lattice;
+                    const JuliaOptions& julia, double iso, double alpha, const json& start,
+                    const QualityOptions& options) {
+  mesh::FidelityOptions o;
+  o.lattice = options.lattice;
   o.julia = julia;
   o.iso = iso;
   const mesh::Fidelity f = mesh::MeasureSets(chosen, target, o);
-  const monopole::StartCheck s = monopole::CheckStart(initial, target, alpha);
   json j = f.ToJson();
   j["lattice"] = o.lattice;
   j["iterations"] = julia.iterations;
+  if (start.is_object()) {
+    j["start"] = start;
+    return j;
+  }
+  const monopole::StartCheck s = monopole::CheckStart(initial, target, alpha);
   j["start"] = {{"iou", s.iou},
                 {"median_L_inside", s.median_inside},
                 {"median_L_outside", s.median_outside},
@@ -45,7 +51,7 @@ json RunQuality(const Experiment& e, const std::string& results, const QualityTh
   auto warn = [&](const std::string& w) { warnings.push_back(w); };
   const json f = ReadStageFile(P("fidelity/fidelity.json"));
   if (f.is_object()) {
-    const double lattice_nodes = std::pow(double(f.value("lattice", 72)), 3);
+    const double lattice_nodes = std::pow(double(f.value("lattice", QualityOptions().lattice)), 3);
     const int n = f.value("iterations", 0);
     figures["lattice"] = f["lattice"];
     figures["one_step"] = {{"iou", f["one_step"]["iou"]}, {"leak", f["one_step"]["leak"]}};
@@ -54,8 +60,8 @@ json RunQuality(const Experiment& e, const std::string& results, const QualityTh
       warn("the optimized map's one-step set does not follow the shape: one-step IoU " + Decimals(iou1, 3) +
            " (below " + Decimals(t.min_iou, 2) + ")");
     if (leak1 > t.max_leak)
-      warn("the one-step set leaks: " + Decimals(leak1, 3) + " of the shape's volume lies outside the shape box (above " +
-           Decimals(t.max_leak, 2) + ")");
+      warn("the one-step set leaks: its part outside the shape box is " + Decimals(leak1, 3) +
+           " of the shape's volume (above " + Decimals(t.max_leak, 2) + ")");
     if (f.contains("n_step")) {
       const double iou = f["n_step"].value("iou", 0.0), leak = f["n_step"].value("leak", 0.0);
       const double fill = double(f["n_step"].value("set_nodes", 0LL)) / lattice_nodes;
@@ -66,7 +72,7 @@ json RunQuality(const Experiment& e, const std::string& results, const QualityTh
              "; the shape box is 0.36 of it); the mesh is not the shape");
       // At n = 1 the n-step set is the one-step set: its IoU and leak are warned about above.
       if (leak > t.max_leak && n > 1)
-        warn(set + " leaks: " + Decimals(leak, 3) + " of the shape's volume lies outside the shape box (above " +
+        warn(set + " leaks: its part outside the shape box is " + Decimals(leak, 3) + " of the shape's volume (above " +
              Decimals(t.max_leak, 2) + ")");
       if (iou < t.min_iou && n > 1)
         warn(set + " does not follow the shape: n-step IoU " + Decimals(iou, 3) + " (below " + Decimals(t.min_iou, 2) +

@@ -369,10 +369,16 @@ void Runner::Quijibo() {
   const double alpha = chosen.optimizer.energy.alpha;
   cache_.Run("fidelity", "fidelity",
              {{"julia", JuliaJson(e_.mesh.julia, e_.mesh.iso, "double")}, {"alpha", alpha},
-              {"lattice", mesh::FidelityOptions().lattice}},
+              {"lattice", QualityOptions().lattice}},
              {}, {initial_hash, chosen_hash}, [&](const std::string& dir) {
+               // The start check of the fits is in monopoles.json already (same map, grid and alpha
+               // only when the energy's alpha is the guess's: else it is made again).
+               const json monopoles = ReadStageFile(P("initial/monopoles.json"));
+               const bool same_alpha = e_.initial.guess.alpha == alpha;
                const json q = MeasureQuality(ReadMap(P("initial/map.json")), ReadMap(map_path),
-                                             ReadGrid(P("initial/target.qgrid")), e_.mesh.julia, e_.mesh.iso, alpha);
+                                             ReadGrid(P("initial/target.qgrid")), e_.mesh.julia, e_.mesh.iso, alpha,
+                                             monopoles.is_object() && same_alpha ? monopoles.value("start", json())
+                                                                                 : json());
                WriteFileAtomically(dir + "/fidelity.json", q.dump(1) + "\n");
              });
 }
