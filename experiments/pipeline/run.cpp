@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include "experiments/pipeline/plot.h"
@@ -130,6 +131,21 @@ class Runner {
     const std::lock_guard<std::mutex> lock(mu_);
     finished_ = true;
   }
+  // experiment.resolved.json and run.json (`state` null: the run is complete).
+  nlohmann::json ResolvedJson() const {
+    json j = e_.ToJson();
+    j["results"] = fs::absolute(results_).lexically_normal().string();
+    return j;
+  }
+  nlohmann::json RunJson(const std::vector<StageRecord>& records, double seconds, const RunState* state) const {
+    json run = {{"experiment", e_.path}, {"name", e_.name}, {"seconds", seconds}, {"stages", json::array()}};
+    for (const auto& r : records)
+      run["stages"].push_back({{"stage", r.name}, {"status", r.status}, {"seconds", r.seconds}, {"hash", r.hash}});
+    run["complete"] = state == nullptr;
+    if (json q = RunQuality(e_, results_); !q.is_null()) run["quality"] = q;
+    if (state) run["stopped"] = {{"stage", state->stopped_in}, {"reason", state->reason}, {"resume", state->resume}};
+    return run;
+  }
 
  private:
   void Announce(const std::string& what) {
@@ -184,23 +200,6 @@ class Runner {
     return true;
   }
 
- public:
-  nlohmann::json ResolvedJson() const {
-    json j = e_.ToJson();
-    j["results"] = fs::absolute(results_).lexically_normal().string();
-    return j;
-  }
-  nlohmann::json RunJson(const std::vector<StageRecord>& records, double seconds, const RunState* state) const {
-    json run = {{"experiment", e_.path}, {"name", e_.name}, {"seconds", seconds}, {"stages", json::array()}};
-    for (const auto& r : records)
-      run["stages"].push_back({{"stage", r.name}, {"status", r.status}, {"seconds", r.seconds}, {"hash", r.hash}});
-    run["complete"] = state == nullptr;
-    if (json q = RunQuality(e_, results_); !q.is_null()) run["quality"] = q;
-    if (state) run["stopped"] = {{"stage", state->stopped_in}, {"reason", state->reason}, {"resume", state->resume}};
-    return run;
-  }
-
- private:
   std::string P(const std::string& rel) const { return cache_.Path(rel); }
   // The render of a modulus or portal mesh.
   void RenderStage(const std::string& mesh, const std::string& upstream);
@@ -214,7 +213,7 @@ class Runner {
   // The folders of the stages that read each stage's output (by folder), and the stages that
   // compute in their folder rather than in "<folder>.partial".
   std::map<std::string, std::vector<std::string>> downstream_;
-  std::map<std::string, bool> in_place_;
+  std::set<std::string> in_place_;
   // What the run has done, guarded by mu_ for SignalWatcher's thread.
   std::mutex mu_;
   std::string stage_, computing_;
@@ -277,7 +276,7 @@ void Runner::Quijibo() {
     downstream_[o.name] = {"plot"};
     if (o.name == e_.chosen_optimizer().name)
       downstream_[o.name].insert(downstream_[o.name].end(), {"mesh", "pictures", "fidelity"});
-    in_place_[o.name] = true;
+    in_place_.insert(o.name);
   }
   downstream_["mesh"] = {"pictures"};
 
