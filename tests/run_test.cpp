@@ -394,7 +394,7 @@ TEST(RunTest, AnInterruptInEachStageLeavesAnIncompleteReportAndNoStaleOutputs) {
   json changed = Tiny();
   changed["initial"]["root_radius"] = 1.1;  // every stage computes again
   Write(exp, changed.dump(1));
-  std::vector<std::string> stages = {"initial", "optimized", "mesh", "pictures"};
+  std::vector<std::string> stages = {"initial", "optimized", "mesh", "pictures", "fidelity"};
   if (HaveGnuplot()) stages.insert(stages.begin() + 2, "plot");
   for (std::size_t k = 0; k < stages.size(); ++k) {
     const std::string& stage = stages[k];
@@ -428,6 +428,42 @@ TEST(RunTest, AnInterruptInEachStageLeavesAnIncompleteReportAndNoStaleOutputs) {
             130)
       << err;
   EXPECT_FALSE(fs::exists(dir + "/fresh")) << err;
+  fs::remove_all(dir);
+}
+
+// The same for the stages of the other methods: modulus (and its render), portal.
+TEST(RunTest, AnInterruptInTheModulusOrPortalStageLeavesAnIncompleteReport) {
+  const std::string dir = TempDir("interrupt_products");
+  const json modulus = {{"name", "m"},
+                        {"method", "modulus"},
+                        {"target", {{"analytic", "sphere"}}},
+                        {"modulus", {{"sdf_resolution", 16}, {"output", {{"format", "ply"}, {"resolution", 16}}}}},
+                        {"pictures", {{"render_size", 32}, {"render_views", 1}}}};
+  const json portal = {{"name", "p"},
+                       {"method", "portal"},
+                       {"portal", {{"koch", true}, {"output", {{"format", "png"}, {"png_size", 32}}}}}};
+  struct Case {
+    json experiment;
+    std::string stage;
+  };
+  for (const Case& c : {Case{modulus, "modulus"}, Case{modulus, "pictures"}, Case{portal, "portal"}}) {
+    const std::string exp = dir + "/" + c.stage + ".json", out = dir + "/" + c.stage;
+    Write(exp, c.experiment.dump(1));
+    std::string err;
+    ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+    json changed = c.experiment;
+    changed["name"] = "changed";  // not hashed: the output settings are
+    if (c.stage == "portal") changed["portal"]["output"]["png_size"] = 40;
+    else changed["modulus"]["output"]["resolution"] = 18;
+    Write(exp, changed.dump(1));
+    EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err, nullptr, 0, "QUIJIBO_TEST_SIGNAL_IN_STAGE=" + c.stage),
+              130)
+        << c.stage << ": " << err;
+    interrupt::ExpectInterruptLine(err, c.stage);
+    EXPECT_EQ(Slurp(out + "/report.md").rfind("# changed (INCOMPLETE)", 0), 0u) << Slurp(out + "/report.md");
+    EXPECT_FALSE(fs::exists(out + "/pictures")) << c.stage;
+    interrupt::ExpectOnlyThisRunsStages(out);
+  }
   fs::remove_all(dir);
 }
 
