@@ -16,7 +16,11 @@ std::string Number(double x) {
   return buf;
 }
 
-std::string Point(const Vec3& p) { return "(" + Number(p[0]) + ", " + Number(p[1]) + ", " + Number(p[2]) + ")"; }
+std::string Point(const Vec3& p) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "(%.6g, %.6g, %.6g)", p[0], p[1], p[2]);
+  return buf;
+}
 
 }  // namespace
 
