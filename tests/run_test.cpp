@@ -467,6 +467,35 @@ TEST(RunTest, AnInterruptInTheModulusOrPortalStageLeavesAnIncompleteReport) {
   fs::remove_all(dir);
 }
 
+// A stage that fails (here the initial stage, given a map in another frame than the target's)
+// leaves the report INCOMPLETE with the error as the reason, and none of the earlier run's later
+// stages; the command says the one line of the error.
+TEST(RunTest, AFailedStageLeavesAnIncompleteReportWithTheReason) {
+  const std::string dir = TempDir("failed");
+  const std::string exp = dir + "/tiny.json", out = dir + "/results";
+  Write(exp, Tiny().dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  json map = json::parse(Slurp(out + "/optimized/map.json"));
+  map["frame"]["origin"] = {0.4, 0.5, 0.5};
+  Write(dir + "/moved.json", map.dump());
+  json changed = Tiny();
+  changed["initial"] = {{"kind", "map"}, {"map", "moved.json"}};
+  Write(exp, changed.dump(1));
+  EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 1) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find("is not the map's (" + dir + "/moved.json): origin (0.5, 0.5, 0.5) vs (0.4, 0.5, 0.5)"),
+            std::string::npos)
+      << err;
+  const std::string report = Slurp(out + "/report.md");
+  EXPECT_NE(report.find("**INCOMPLETE:** the run stopped in stage initial: "), std::string::npos) << report;
+  EXPECT_NE(report.find("is not the map's"), std::string::npos) << report;
+  for (const char* gone : {"initial", "optimized", "mesh", "pictures", "fidelity", "plot"})
+    EXPECT_FALSE(fs::exists(out + "/" + std::string(gone))) << gone;
+  EXPECT_EQ(RunRecord(out)["complete"], false);
+  fs::remove_all(dir);
+}
+
 // Ctrl-C inside the optimization (QUIJIBO_TEST_SIGNAL_AFTER_STEP): the optimizer writes its
 // checkpoint, the run exits 130 with one line, the report names no map that is not there, and
 // --resume continues from the checkpoint.
