@@ -384,7 +384,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
           notify(a);
         }
         IterationAction action = IterationAction::kContinue;
-        if (st.step == TestSignalStep()) ::kill(::getpid(), SIGINT);  // a Ctrl-C here, as the handler sees it
+        if (st.step == TestSignalStep()) std::raise(SIGINT);  // a Ctrl-C, handled before raise returns
         if (g_interrupted || abort) {
           checkpoints.Write(li, pj, it, st.Current(), st.pass_start_x, false);
           action = IterationAction::kStop;

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -179,7 +180,7 @@ class Runner {
   void TestSignal(const std::string& folder) const {
     static const char* stage = std::getenv("QUIJIBO_TEST_SIGNAL_IN_STAGE");
     if (!signals_ || !stage || folder != stage) return;
-    ::kill(::getpid(), SIGINT);
+    std::raise(SIGINT);
     for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
   }
   // report.md and run.json of a run that has not finished. Call with mu_ held.
