@@ -589,8 +589,8 @@ TEST(RunTest, AGoodResultIsReportedWithItsFiguresAndNoWarning) {
 
 // R = C / q with ln C = -50 on the torus: |R| < 1 almost everywhere, so the one-step set and the
 // n = 3 set (q_2 = q, q_3 = C / q) fill the box and leak far beyond the shape box, L falls outward
-// (inverted) and tanh is flat everywhere (saturated): each of these is a warning, in run.json and
-// report.md.
+// (inverted) and tanh is flat everywhere (saturated); the torus's centre, the fractal origin, is
+// outside it: each of these is a warning, in run.json and report.md.
 TEST(RunTest, ASetThatFillsTheBoxFromAnInvertedSaturatedStartIsWarnedAbout) {
   const std::string dir = TempDir("quality_bad");
   Write(dir + "/map.json", quality::OneRootMap(false, -50.0));
@@ -600,7 +600,7 @@ TEST(RunTest, ASetThatFillsTheBoxFromAnInvertedSaturatedStartIsWarnedAbout) {
   const std::string w = quality::Warnings(dir + "/r");
   for (const char* expect : {"the one-step set leaks", "the n = 3 set fills the box", "the n = 3 set leaks",
                              "the start is inverted", "the start is saturated",
-                             "one-step set does not follow the shape"})
+                             "one-step set does not follow the shape", "origin lies outside the shape"})
     EXPECT_NE(w.find(expect), std::string::npos) << expect << " in\n" << w;
   fs::remove_all(dir);
 }

@@ -32,6 +32,13 @@ json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const
   json j = f.ToJson();
   j["lattice"] = o.lattice;
   j["iterations"] = julia.iterations;
+  // Orbits are trapped at the fractal origin (docs/fidelity.md §3): phi there, outside the grid
+  // counted as outside.
+  const Vec3 lo = target.frame.min_corner, ext = target.frame.extent();
+  bool in_grid = true;
+  for (int a = 0; a < 3; ++a) in_grid = in_grid && lo[a] <= 0 && 0 <= lo[a] + ext[a];
+  const double phi0 = in_grid ? target.sample({0.0, 0.0, 0.0}) : 1.0;
+  j["origin"] = {{"phi", phi0}, {"inside", phi0 < 0}};
   if (start.is_object()) {
     j["start"] = start;
     return j;
@@ -98,12 +105,18 @@ json RunQuality(const Experiment& e, const std::string& results, const QualityTh
       warn("the mesh is not closed: " + std::to_string(ms.value("open_edges_inside", 0LL)) +
            " open edges away from the box faces");
   }
+  // The same trap for both methods; what moves the origin differs.
   const json mod = ReadStageFile(P("modulus/modulus.json"));
-  if (mod.is_object() && mod.contains("origin")) {
-    figures["origin"] = mod["origin"];
-    if (!mod["origin"].value("inside", true))
-      warn("the iteration's origin lies outside the shape (phi " + Decimals(mod["origin"].value("phi", 0.0), 3) +
-           " there): orbits are trapped outside it and the set erodes or vanishes; move the shape over it (modulus.offset, --offset)");
+  const json origin = mod.is_object() && mod.contains("origin") ? mod["origin"]
+                      : f.is_object() && f.contains("origin") ? f["origin"]
+                                                              : json();
+  if (origin.is_object()) {
+    figures["origin"] = origin;
+    if (!origin.value("inside", true))
+      warn("the iteration's origin lies outside the shape (phi " + Decimals(origin.value("phi", 0.0), 3) +
+           " there): orbits are trapped at it, so the n-step set erodes or vanishes; " +
+           (mod.is_object() ? "move the shape over it (modulus.offset, --offset)"
+                            : "for a mesh target, target.origin \"inside\" (the default) puts it deep inside"));
   }
   (void)e;
   if (figures.empty()) return nullptr;

@@ -65,7 +65,8 @@ class Runner {
         results_(results),
         created_(created),
         signals_(o.handle_signals),
-        resume_("quijibo run " + ShellWord(e.path) + " --out " + ShellWord(results) + " --resume"),
+        resume_("quijibo run " + (e.path.empty() ? std::string("EXPERIMENT.json") : ShellWord(e.path)) + " --out " +
+                ShellWord(results) + " --resume"),
         t0_(std::chrono::steady_clock::now()),
         cache_(
             results, o.resume, [this](const std::string& what) { Announce(what); },
