@@ -70,9 +70,9 @@ std::string StageCache::Run(const std::string& name, const std::string& folder, 
   const std::string partial = dir + ".partial";
   fs::remove_all(partial);
   fs::create_directories(partial);
-  if (computing_) computing_(folder);
   const auto t0 = std::chrono::steady_clock::now();
   try {
+    if (computing_) computing_(folder);
     compute(partial);
   } catch (...) {
     std::error_code ec;
