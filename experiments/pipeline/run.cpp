@@ -368,8 +368,13 @@ void Runner::Quijibo() {
   // 6. fidelity: the figures and the start check behind report.md's Quality section (quality.h),
   // at the n and iso of the mesh.
   const double alpha = chosen.optimizer.energy.alpha;
+  // The set the mesh shows, without its placement and root transforms (they move it off the target).
+  JuliaOptions set;
+  set.iterations = e_.mesh.julia.iterations;
+  set.escape_radius = e_.mesh.julia.escape_radius;
+  set.slice = e_.mesh.julia.slice;
   cache_.Run("fidelity", "fidelity",
-             {{"julia", JuliaJson(e_.mesh.julia, e_.mesh.iso, "double")}, {"alpha", alpha},
+             {{"julia", JuliaJson(set, e_.mesh.iso, "double")}, {"alpha", alpha},
               {"lattice", QualityOptions().lattice}},
              {}, {initial_hash, chosen_hash}, [&](const std::string& dir) {
                // The start check of the fits is in monopoles.json already (same map, grid and alpha
@@ -377,7 +382,7 @@ void Runner::Quijibo() {
                const json monopoles = ReadStageFile(P("initial/monopoles.json"));
                const bool same_alpha = e_.initial.guess.alpha == alpha;
                const json q = MeasureQuality(ReadMap(P("initial/map.json")), ReadMap(map_path),
-                                             ReadGrid(P("initial/target.qgrid")), e_.mesh.julia, e_.mesh.iso, alpha,
+                                             ReadGrid(P("initial/target.qgrid")), set, e_.mesh.iso, alpha,
                                              monopoles.is_object() && same_alpha ? monopoles.value("start", json())
                                                                                  : json());
                WriteFileAtomically(dir + "/fidelity.json", q.dump(1) + "\n");
