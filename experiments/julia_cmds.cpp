@@ -49,13 +49,12 @@ std::vector<double> ParseBox(const std::string& text) {
   return b;
 }
 
-// Fails early (before any long computation) when a picture cannot be written.
+// Fails early (before any long computation) when the picture's name is wrong; its folder is created
+// when it is written.
 void CheckPng(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
   if (ext != ".png") throw Error(path + ": the picture must end in .png");
-  const auto dir = std::filesystem::path(path).parent_path();
-  if (!dir.empty() && !std::filesystem::is_directory(dir)) throw Error(path + ": folder " + dir.string() + " does not exist");
 }
 
 // The Julia-set options of the mesh and picture commands: the mesh stage's settings (`keys`) and
@@ -119,13 +118,20 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
   a->j.add(c, {"resolution", "iterations", "escape", "iso", "iteration_frame", "detail", "frame", "precision", "kernel"});
   c->callback([a, mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
-    pipeline::CheckMeshFiles(a->files);
+    // The output names first (their folders are created only once everything else is validated).
+    pipeline::MeshFiles names = a->files;
+    for (std::string* p : {&names.out, &names.obj, &names.vdb}) *p = std::filesystem::path(*p).filename().string();
+    pipeline::CheckMeshFiles(names);
     const RationalMap map = ReadMap(a->map);
     o.meshing.show_progress = true;
     if (!a->box.empty()) o.box = ParseBox(a->box);
     if (!a->files.vdb.empty() && o.vdb_grids.empty()) throw Error("--vdb-grids: name at least one grid");
     a->j.finish({0, 0, 0});  // the translation; MeshJulia places the rotation about the box's centre
     o.julia.placement = SampleTransform{};
+    if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
+    for (const std::string& p : {a->files.out, a->files.obj, a->files.vdb, a->summary})
+      if (!p.empty() && p != "-") CreateParentFolder(p);
+    pipeline::CheckMeshFiles(a->files);
     const pipeline::MeshStageResult r = pipeline::MeshJulia(map, o, mesher);
     if (!r.writer) return;
     if (r.empty() && !a->allow_empty)
@@ -193,6 +199,7 @@ void AddPicture(CLI::App& app) {
     const pipeline::MeshStageOptions& o = s->j.o;
     const pipeline::SlicePicture pic =
         pipeline::SliceAgainstTargetPicture(map, target, s->target, view, o.julia, o.iso, o.precision);
+    CreateParentFolder(s->out);
     WritePng(s->out, pic.image);
     WriteOutput("", pipeline::SliceReport(pic, s->out, o.julia, o.iso, o.precision).dump(2) + "\n");
   });
@@ -216,6 +223,7 @@ void AddPicture(CLI::App& app) {
     const mesh::SliceView view = f->View({c[0] - h, c[1] - h, c[2] - h}, {c[0] + h, c[1] + h, c[2] + h});
     f->j.finish({(view.min_corner[0] + view.max_corner[0]) / 2, (view.min_corner[1] + view.max_corner[1]) / 2,
                  (view.min_corner[2] + view.max_corner[2]) / 2});
+    CreateParentFolder(f->out);
     WritePng(f->out, mesh::ModulusVersorSlice(map, f->j.o.julia, view, f->modulus_scale, f->j.o.iso));
   });
 
@@ -231,7 +239,9 @@ void AddPicture(CLI::App& app) {
   BindSettings(rc, r->pics, {"render_size", "render_views"});
   rc->callback([r] {
     CheckPng(r->out);
-    WritePng(r->out, mesh::RenderMesh(mesh::ReadMesh(r->mesh), r->pics.render));
+    const Image image = mesh::RenderMesh(mesh::ReadMesh(r->mesh), r->pics.render);
+    CreateParentFolder(r->out);
+    WritePng(r->out, image);
   });
 }
 
