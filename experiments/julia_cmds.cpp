@@ -57,6 +57,16 @@ void CheckPng(const std::string& path) {
   if (ext != ".png") throw Error(path + ": the picture must end in .png");
 }
 
+// Fails early when the folder of an output file cannot be made (a file where a folder should be),
+// without making it: a long meshing should not end in that error, nor a failed one leave folders.
+void CheckFolderCanBeMade(const std::string& path) {
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  std::filesystem::path existing = dir;
+  while (!existing.empty() && !std::filesystem::exists(existing)) existing = existing.parent_path();
+  if (!existing.empty() && !std::filesystem::is_directory(existing))
+    throw Error(path + ": cannot create folder " + dir.string() + ": " + existing.string() + " is not a folder");
+}
+
 // The Julia-set options of the mesh and picture commands: the mesh stage's settings (`keys`) and
 // the transforms only the command line offers.
 struct JuliaArgs {
@@ -118,26 +128,25 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
   a->j.add(c, {"resolution", "iterations", "escape", "iso", "iteration_frame", "detail", "frame", "precision", "kernel"});
   c->callback([a, mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
-    // The output names first (their folders are created only once everything else is validated).
+    // The output names first; their folders are created when the mesh is ready to be written.
     pipeline::MeshFiles names = a->files;
     for (std::string* p : {&names.out, &names.obj, &names.vdb}) *p = std::filesystem::path(*p).filename().string();
     pipeline::CheckMeshFiles(names);
+    for (const std::string& p : {a->files.out, a->files.obj, a->files.vdb}) CheckFolderCanBeMade(p);
     const RationalMap map = ReadMap(a->map);
     o.meshing.show_progress = true;
     if (!a->box.empty()) o.box = ParseBox(a->box);
     if (!a->files.vdb.empty() && o.vdb_grids.empty()) throw Error("--vdb-grids: name at least one grid");
     a->j.finish({0, 0, 0});  // the translation; MeshJulia places the rotation about the box's centre
     o.julia.placement = SampleTransform{};
-    if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
-    for (const std::string& p : {a->files.out, a->files.obj, a->files.vdb, a->summary})
-      if (!p.empty() && p != "-") CreateParentFolder(p);
-    pipeline::CheckMeshFiles(a->files);
     const pipeline::MeshStageResult r = pipeline::MeshJulia(map, o, mesher);
     if (!r.writer) return;
     if (r.empty() && !a->allow_empty)
       throw Error(a->map + ": the surface log|q_n| = " + std::to_string(o.iso) +
                   " does not cross the box (no triangles); nothing written");
     if (r.empty()) std::fprintf(stderr, "quijibo: the surface does not cross the box (no triangles): no mesh written\n");
+    for (const std::string& p : {a->files.out, a->files.obj, a->files.vdb})
+      if (!p.empty() && !r.empty()) CreateParentFolder(p);
     pipeline::WriteMeshFiles(r, o, a->files);
     WriteOutput(a->summary, pipeline::MeshSummary(r, o, a->map, a->files).dump(2) + "\n");
   });
