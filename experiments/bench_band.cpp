@@ -13,6 +13,7 @@
 #include <cstdio>
 
 #include "experiments/cli.h"
+#include "mesh/sdf_command.h"
 #include "optim/lbfgsb.h"
 #include "quijibo/band_energy.h"
 #include "quijibo/error.h"
@@ -96,6 +97,7 @@ json RunBand(const BandArgs& a) {
     RationalMap map;
     if (!a.map_path.empty()) {
       map = ReadMap(a.map_path);
+      mesh::CheckSameFrame(map.frame, a.map_path, a.target);
     } else {
       const int top = roots == 331 ? 178 : roots == 708 ? 352 : (roots + 1) / 2;
       RandomMapOptions o;

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "mesh/sdf_command.h"
 #include "quijibo/cached_energy.h"
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
@@ -183,8 +184,9 @@ void AddEnergyCommand(CLI::App& app) {
       ->check(CLI::Range(1, 1000));
   c->add_option("-o,--out", a->out, "Write the JSON report here (default: stdout)");
   c->callback([a] {
-    const ScalarGrid sdf = LoadTarget(a->target, a->target_resolution);
     const RationalMap map = ReadMap(a->map_path);
+    mesh::CheckSameFrame(map.frame, a->map_path, a->target);
+    const ScalarGrid sdf = LoadTarget(a->target, a->target_resolution);
     EnergyOptions options;
     options.alpha = a->alpha;
     const EnergyGrid grid =

@@ -15,6 +15,7 @@
 #include "experiments/cli.h"
 #include "experiments/pipeline/mesh.h"
 #include "experiments/pipeline/pictures.h"
+#include "mesh/sdf_command.h"
 #include "quijibo/child_process.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
@@ -199,6 +200,7 @@ void AddPicture(CLI::App& app) {
   sc->callback([s] {
     CheckPng(s->out);
     const RationalMap map = ReadMap(s->map);
+    mesh::CheckSameFrame(map.frame, s->map, s->target);
     const ScalarGrid target = ReadGrid(s->target);
     const mesh::SliceView base = pipeline::TargetSliceView(target, s->pics);
     const mesh::SliceView view = s->View(base.min_corner, base.max_corner);

@@ -56,6 +56,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::fprintf(stderr, "quijibo: error: %s (see --help)\n", e.what());
     return 2;
+  } catch (const quijibo::Interrupted& e) {
+    std::fprintf(stderr, "quijibo: %s\n", e.what());
+    return 128 + e.signal;
   } catch (const quijibo::Error& e) {
     std::fprintf(stderr, "quijibo: error: %s\n", e.what());
     return 1;

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "experiments/cli.h"
+#include "mesh/sdf_command.h"
 #include "optim/optimizer.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
@@ -135,9 +136,11 @@ void AddOptimizeCommand(CLI::App& app) {
     RationalMap map;
     if (a->resume) {
       map = ReadMap(initial);
+      mesh::CheckSameFrame(map.frame, initial, a->target);
     } else {
       if (a->map_path.empty()) throw Error("--map is required (unless --resume)");
       map = ReadMap(a->map_path);
+      mesh::CheckSameFrame(map.frame, a->map_path, a->target);
       std::filesystem::create_directories(a->out_dir);
       WriteMap(initial, map);
     }

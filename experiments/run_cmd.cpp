@@ -17,7 +17,8 @@ void AddRunCommand(CLI::App& app) {
   auto a = std::make_shared<Args>();
   CLI::App* c = app.add_subcommand(
       "run", "Run a JSON experiment end to end (docs/experiments.md): initial guess, optimization, plot, mesh, "
-             "pictures and report.md in a results folder; unchanged stages are reused");
+             "pictures, fidelity and report.md (INCOMPLETE until the run ends; its Quality section warns where the "
+             "result is not the shape) in a results folder; unchanged stages are reused");
   c->add_option("experiment", a->experiment, "The experiment (.json)")->required();
   c->add_option("-o,--out", a->run.out_dir, "Results folder (default: outputs.folder, else results/<name>)");
   c->add_flag("--resume", a->run.resume, "Continue an interrupted optimization from its checkpoint");
@@ -27,6 +28,7 @@ void AddRunCommand(CLI::App& app) {
   c->callback([a] {
     if (a->run.quiet) Progress::globally_quiet() = true;
     a->run.quiet = Progress::globally_quiet();
+    a->run.handle_signals = true;
     const pipeline::Experiment e = pipeline::Experiment::FromFile(a->experiment);
     const pipeline::RunSummary s = pipeline::RunExperiment(e, a->run);
     if (a->run.check_only) std::printf("%s\n", s.resolved.dump(2).c_str());

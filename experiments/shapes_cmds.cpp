@@ -46,6 +46,7 @@ void AddFidelityOptions(CLI::App* c, mesh::FidelityOptions& o) {
 
 json Measure(const FidelityArgs& a) {
   const RationalMap map = ReadMap(a.map);
+  mesh::CheckSameFrame(map.frame, a.map, a.target);
   const ScalarGrid target = ReadGrid(a.target);
   mesh::FidelityOptions o = a.o;
   o.reference_frame = a.iteration.iteration_frame == "reference";

@@ -68,6 +68,21 @@ FractalFrame ReadFrameJson(const std::string& path) {
   return frame;
 }
 
+void CheckSameFrame(const FractalFrame& map_frame, const std::string& map_path, const std::string& target_path) {
+  const std::string frame_path = FrameJsonPathFor(target_path);
+  std::error_code ec;
+  const bool has_frame = std::filesystem::is_regular_file(frame_path, ec);
+  CheckSameFrame(map_frame, map_path, has_frame ? ReadFrameJson(frame_path) : FractalFrame{}, target_path,
+                 has_frame ? frame_path : "no frame file: the default");
+}
+
+void CheckSameFrame(const FractalFrame& map_frame, const std::string& map_path, const FractalFrame& target_frame,
+                    const std::string& target, const std::string& target_frame_source) {
+  if (const std::string d = FrameDifference(target_frame, map_frame); !d.empty())
+    throw Error(target + ": the target's frame (" + target_frame_source + ") is not the map's (" + map_path + "): " + d +
+                " (target vs map); make both from the same mesh with the same origin and frame scale");
+}
+
 void RunSdfCommand(const SdfCommandOptions& options) {
   if (const std::string why = options.validate(); !why.empty()) throw Error("sdf: " + why);
   MeshReadReport report;

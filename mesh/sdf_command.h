@@ -44,4 +44,12 @@ void WriteFrameJson(const std::string& path, const FractalFrame& frame,
                     const std::string& source_mesh, int resolution);
 FractalFrame ReadFrameJson(const std::string& path);
 
+// The one check of every command that takes a map and a target grid: throws quijibo::Error,
+// naming both files and the fields that differ, when the grid's frame (its .frame.json; a grid
+// without one, such as an analytic target's, is in the default frame) is not the map's.
+void CheckSameFrame(const FractalFrame& map_frame, const std::string& map_path, const std::string& target_path);
+// The same with the target's frame at hand (`target_frame_source` names where it comes from).
+void CheckSameFrame(const FractalFrame& map_frame, const std::string& map_path, const FractalFrame& target_frame,
+                    const std::string& target, const std::string& target_frame_source);
+
 }  // namespace quijibo::mesh

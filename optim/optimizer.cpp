@@ -94,8 +94,17 @@ long long TestExitStep() {
   return step;
 }
 
+// QUIJIBO_TEST_SIGNAL_AFTER_STEP (optimizer.h), or -1.
+long long TestSignalStep() {
+  static const long long step = [] {
+    const char* s = std::getenv("QUIJIBO_TEST_SIGNAL_AFTER_STEP");
+    return s && *s ? std::atoll(s) : -1;
+  }();
+  return step;
+}
+
 volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void OnSignal(int) { g_interrupted = 1; }
+extern "C" void OnSignal(int sig) { g_interrupted = sig; }  // the signal: never 0
 
 // Installs the SIGINT/SIGTERM handlers for the life of the optimization.
 class SignalGuard {
@@ -367,6 +376,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
           notify(a);
         }
         IterationAction action = IterationAction::kContinue;
+        if (st.step == TestSignalStep()) std::raise(SIGINT);  // a Ctrl-C, handled before raise returns
         if (g_interrupted || abort) {
           checkpoints.Write(li, pj, it, st.Current(), st.pass_start_x, false);
           action = IterationAction::kStop;
@@ -427,6 +437,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
   map.set_variables(st.best_x.template cast<double>());
   st.summary.complete = !stopped;
   if (stopped) st.summary.stop_reason = g_interrupted ? "interrupted" : "aborted by a callback";
+  if (stopped) st.summary.signal = int(g_interrupted);
   st.summary.seconds = st.Elapsed();
   st.summary.absolute_end = st.best_absolute;
   WriteFileAtomically(o.out_dir + "/summary.json", st.summary.ToJson(o).dump(1) + "\n");

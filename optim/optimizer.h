@@ -152,6 +152,7 @@ struct OptimizeSummary {
   bool complete = false;     // false when interrupted or aborted
   // Why an incomplete run stopped: "interrupted" (SIGINT/SIGTERM) or "aborted by a callback".
   std::string stop_reason;
+  int signal = 0;  // the SIGINT or SIGTERM that interrupted it; 0 otherwise
   nlohmann::json ToJson(const OptimizeOptions& options) const;
   std::string Report() const;  // a readable table
   std::string BestPassName() const;  // "the map after level 25 pass F (pass 2 of 10)" or the start
@@ -169,5 +170,7 @@ OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const Optimize
 // summary, no destructors) right after step k is logged and, when k is a checkpoint,
 // checkpointed. Steps count iterations over the whole run from 1.
 constexpr int kTestExitCode = 86;
+// Likewise QUIJIBO_TEST_SIGNAL_AFTER_STEP=k sends the process SIGINT right after step k is logged:
+// an interrupt at a known step, without timing.
 
 }  // namespace quijibo::optim

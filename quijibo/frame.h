@@ -51,6 +51,12 @@ struct FractalFrame {
   std::string validate() const;
 };
 
+// How frame `b` differs from frame `a`: "" when they are the same (to 1e-9 relative), else the
+// fields that differ, "origin (0.5, 0.5, 0.5) vs (0.43, 0.52, 0.47), fractal_radius 4 vs 13.5". A map
+// and a target grid in different frames place the shape and the roots differently: psi, the
+// optimization and the figures are then wrong without any other sign.
+std::string FrameDifference(const FractalFrame& a, const FractalFrame& b);
+
 // The box of the target grid (the region the energy sees and fits).
 enum class TargetBox {
   // The whole normalized unit cube, box_center() +- fractal_radius / 2: the shape with a

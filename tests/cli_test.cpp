@@ -4,6 +4,7 @@
 #include "quijibo_command.h"
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -135,6 +136,55 @@ TEST_F(CliTest, RandomMapsAreDeterministic) {
   const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
   EXPECT_EQ(sa, sb);
   EXPECT_EQ(ReadMap(Path("a.json")).top_count(), 30);
+}
+
+// A map and a target grid in different frames (the map's origin moved and its fractal radius
+// doubled, as a `monopoles` map with the origin inside and the trap scale against an `sdf mesh`
+// grid with the default centre): every command that reads both refuses with one line naming both
+// files and the fields that differ, and writes nothing. The same map in the target's frame passes.
+TEST_F(CliTest, EveryCommandWithAMapAndATargetRefusesAFrameMismatch) {
+  const std::string t = Path("t.qgrid"), same = Path("same.json"), other = Path("other.json");
+  ASSERT_EQ(RunQuijibo("target sphere -r 12 -o " + t).code, 0);
+  ASSERT_EQ(RunQuijibo("map random --top 3 --bottom 2 --seed 1 --center-on " + t + " -o " + same).code, 0);
+  nlohmann::json m = nlohmann::json::parse(std::ifstream(same));
+  m["frame"]["origin"] = {0.4, 0.5, 0.5};
+  m["frame"]["fractal_radius"] = 8.0;
+  Write("other.json", m.dump());
+  const std::vector<std::string> commands = {
+      "energy -t T -m M",
+      "optimize -t T -m M -o " + Path("opt") + " --schedule '8(V)'",
+      "fidelity -m M -t T --lattice 8 -n 1",
+      "picture slice M --target T -o " + Path("s.png") + " --size 16 -n 1",
+      "compare --target T --map M -r 8 --samples 200 --png-size 16 -o " + Path("cmp"),
+      "bench band --target T --map M --grids 8 --iterations 1 --form-iterations 0 --json " + Path("band.json"),
+  };
+  auto with = [](std::string c, const std::string& target, const std::string& map) {
+    for (std::size_t at; (at = c.find(" T")) != std::string::npos && (at + 2 == c.size() || c[at + 2] == ' ');)
+      c.replace(at + 1, 1, target);
+    for (std::size_t at; (at = c.find(" M")) != std::string::npos && (at + 2 == c.size() || c[at + 2] == ' ');)
+      c.replace(at + 1, 1, map);
+    return c;
+  };
+  for (const std::string& c : commands) {
+    const CommandResult r = RunQuijibo(with(c, t, other));
+    EXPECT_NE(r.code, 0) << c << ": " << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << c << ": " << r.out;
+    for (const std::string& piece :
+         {t + ": the target's frame (no frame file: the default) is not the map's (" + other + ")",
+          std::string("origin (0.5, 0.5, 0.5) vs (0.4, 0.5, 0.5)"), std::string("fractal_radius 4 vs 8")})
+      EXPECT_NE(r.out.find(piece), std::string::npos) << c << ": " << r.out;
+    for (const char* out : {"opt", "s.png", "cmp", "band.json"})
+      EXPECT_FALSE(std::filesystem::exists(Path(out))) << c << ": " << out;
+  }
+  EXPECT_EQ(RunQuijibo(with(commands[0], t, same)).code, 0);
+  EXPECT_EQ(RunQuijibo(with(commands[2], t, same)).code, 0);
+  // A grid whose frame file records the map's frame passes; the map in the default frame does not.
+  Write("t.frame.json", R"({"format": "quijibo-frame", "version": 1, "fractal_radius": 8, "padding": 0.125,
+                            "scale": 1, "translation": [0, 0, 0], "origin": [0.4, 0.5, 0.5]})");
+  EXPECT_EQ(RunQuijibo(with(commands[0], t, other)).code, 0);
+  const CommandResult r = RunQuijibo(with(commands[0], t, same));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.out.find("(" + Path("t.frame.json") + ") is not the map's"), std::string::npos) << r.out;
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <fcntl.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -354,6 +355,289 @@ TEST(RunTest, KilledAndResumedRunMatchesAnUninterruptedOne) {
   bool saw_resumed = false;
   for (const json& s : json(RunRecord(dir + "/killed")["stages"])) saw_resumed |= s["status"] == "resumed";
   EXPECT_TRUE(saw_resumed) << RunRecord(dir + "/killed").dump() << err;
+  fs::remove_all(dir);
+}
+
+namespace interrupt {
+
+// Every folder of a stage in `out` was made by the run recorded in run.json (or is the optimization
+// that run left for --resume), and no "<stage>.partial" is left.
+void ExpectOnlyThisRunsStages(const std::string& out) {
+  const json run = RunRecord(out);
+  std::vector<std::string> hashes;
+  for (const json& s : run["stages"]) hashes.push_back(s["hash"]);
+  for (const auto& e : fs::directory_iterator(out)) {
+    const std::string p = e.path().string();
+    EXPECT_EQ(p.find(".partial"), std::string::npos) << p;
+    if (!fs::exists(p + "/stage.json")) continue;
+    const std::string h = json::parse(Slurp(p + "/stage.json"))["hash"];
+    EXPECT_NE(std::find(hashes.begin(), hashes.end(), h), hashes.end()) << p << " predates the run";
+  }
+}
+
+// The one line of an interrupted run: the stage, the signal and the command that resumes it.
+void ExpectInterruptLine(const std::string& err, const std::string& stage) {
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_EQ(err.rfind("quijibo: interrupted (SIGINT) in stage " + stage, 0), 0u) << err;
+  EXPECT_NE(err.find("--resume"), std::string::npos) << err;
+}
+
+}  // namespace interrupt
+
+// Ctrl-C in each stage of a run whose settings changed (QUIJIBO_TEST_SIGNAL_IN_STAGE sends the
+// SIGINT as the stage starts computing): exit 130, one line, report.md and run.json INCOMPLETE
+// naming the stage, and nothing of the earlier run's later stages left to pass for this run's.
+TEST(RunTest, AnInterruptInEachStageLeavesAnIncompleteReportAndNoStaleOutputs) {
+  const std::string dir = TempDir("interrupt");
+  const std::string exp = dir + "/tiny.json", base = dir + "/base";
+  Write(exp, Tiny().dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", base, "--quiet"}, &err), 0) << err;
+  json changed = Tiny();
+  changed["initial"]["root_radius"] = 1.1;  // every stage computes again
+  Write(exp, changed.dump(1));
+  std::vector<std::string> stages = {"initial", "optimized", "mesh", "pictures", "fidelity"};
+  if (HaveGnuplot()) stages.insert(stages.begin() + 2, "plot");
+  for (std::size_t k = 0; k < stages.size(); ++k) {
+    const std::string& stage = stages[k];
+    const std::string out = dir + "/" + stage;
+    fs::copy(base, out, fs::copy_options::recursive);
+    EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err, nullptr, 0, "QUIJIBO_TEST_SIGNAL_IN_STAGE=" + stage),
+              130)
+        << stage << ": " << err;
+    interrupt::ExpectInterruptLine(err, stage == "optimized" ? "optimize (optimized" : stage);
+    const std::string report = Slurp(out + "/report.md");
+    EXPECT_EQ(report.rfind("# tiny (INCOMPLETE)", 0), 0u) << stage << ": " << report;
+    EXPECT_NE(report.find("**INCOMPLETE:** the run stopped in stage"), std::string::npos) << report;
+    EXPECT_NE(report.find("interrupted (SIGINT)"), std::string::npos) << report;
+    EXPECT_NE(report.find("quijibo run " + exp + " --out " + out + " --resume"), std::string::npos) << report;
+    const json run = RunRecord(out);
+    EXPECT_EQ(run["complete"], false) << run;
+    EXPECT_EQ(run["stopped"]["reason"], "interrupted (SIGINT)") << run;
+    EXPECT_EQ(run["stages"].size(), k) << run;  // the stages before it finished
+    for (std::size_t later = k; later < stages.size(); ++later)
+      EXPECT_FALSE(fs::exists(out + "/" + stages[later] + "/stage.json")) << stage << ": " << stages[later];
+    interrupt::ExpectOnlyThisRunsStages(out);
+  }
+  // Resumed, the run finishes and the report is whole again.
+  ASSERT_EQ(RunQ({"run", exp, "--out", dir + "/mesh", "--resume", "--quiet"}, &err), 0) << err;
+  EXPECT_EQ(Slurp(dir + "/mesh/report.md").find("INCOMPLETE"), std::string::npos);
+  EXPECT_EQ(RunRecord(dir + "/mesh")["complete"], true);
+  EXPECT_TRUE(fs::exists(dir + "/mesh/pictures/render.png"));
+  // Interrupted before any stage finished, a results folder the run created goes again.
+  EXPECT_EQ(RunQ({"run", exp, "--out", dir + "/fresh", "--quiet"}, &err, nullptr, 0,
+                 "QUIJIBO_TEST_SIGNAL_IN_STAGE=initial"),
+            130)
+      << err;
+  EXPECT_FALSE(fs::exists(dir + "/fresh")) << err;
+  fs::remove_all(dir);
+}
+
+// The same for the stages of the other methods: modulus (and its render), portal.
+TEST(RunTest, AnInterruptInTheModulusOrPortalStageLeavesAnIncompleteReport) {
+  const std::string dir = TempDir("interrupt_products");
+  const json modulus = {{"name", "m"},
+                        {"method", "modulus"},
+                        {"target", {{"analytic", "sphere"}}},
+                        {"modulus", {{"sdf_resolution", 16}, {"output", {{"format", "ply"}, {"resolution", 16}}}}},
+                        {"pictures", {{"render_size", 32}, {"render_views", 1}}}};
+  const json portal = {{"name", "p"},
+                       {"method", "portal"},
+                       {"portal", {{"koch", true}, {"output", {{"format", "png"}, {"png_size", 32}}}}}};
+  struct Case {
+    json experiment;
+    std::string stage;
+  };
+  for (const Case& c : {Case{modulus, "modulus"}, Case{modulus, "pictures"}, Case{portal, "portal"}}) {
+    const std::string exp = dir + "/" + c.stage + ".json", out = dir + "/" + c.stage;
+    Write(exp, c.experiment.dump(1));
+    std::string err;
+    ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+    json changed = c.experiment;
+    changed["name"] = "changed";  // not hashed: the output settings are
+    if (c.stage == "portal") changed["portal"]["output"]["png_size"] = 40;
+    else changed["modulus"]["output"]["resolution"] = 18;
+    Write(exp, changed.dump(1));
+    EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err, nullptr, 0, "QUIJIBO_TEST_SIGNAL_IN_STAGE=" + c.stage),
+              130)
+        << c.stage << ": " << err;
+    interrupt::ExpectInterruptLine(err, c.stage);
+    EXPECT_EQ(Slurp(out + "/report.md").rfind("# changed (INCOMPLETE)", 0), 0u) << Slurp(out + "/report.md");
+    EXPECT_FALSE(fs::exists(out + "/pictures")) << c.stage;
+    interrupt::ExpectOnlyThisRunsStages(out);
+  }
+  fs::remove_all(dir);
+}
+
+// A stage that fails (here the initial stage, given a map in another frame than the target's)
+// leaves the report INCOMPLETE with the error as the reason, and none of the earlier run's later
+// stages; the command says the one line of the error.
+TEST(RunTest, AFailedStageLeavesAnIncompleteReportWithTheReason) {
+  const std::string dir = TempDir("failed");
+  const std::string exp = dir + "/tiny.json", out = dir + "/results";
+  Write(exp, Tiny().dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  json map = json::parse(Slurp(out + "/optimized/map.json"));
+  map["frame"]["origin"] = {0.4, 0.5, 0.5};
+  Write(dir + "/moved.json", map.dump());
+  json changed = Tiny();
+  changed["initial"] = {{"kind", "map"}, {"map", "moved.json"}};
+  Write(exp, changed.dump(1));
+  EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 1) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find("is not the map's (" + dir + "/moved.json): origin (0.5, 0.5, 0.5) vs (0.4, 0.5, 0.5)"),
+            std::string::npos)
+      << err;
+  const std::string report = Slurp(out + "/report.md");
+  EXPECT_NE(report.find("**INCOMPLETE:** the run stopped in stage initial: "), std::string::npos) << report;
+  EXPECT_NE(report.find("is not the map's"), std::string::npos) << report;
+  for (const char* gone : {"initial", "optimized", "mesh", "pictures", "fidelity", "plot"})
+    EXPECT_FALSE(fs::exists(out + "/" + std::string(gone))) << gone;
+  EXPECT_EQ(RunRecord(out)["complete"], false);
+  fs::remove_all(dir);
+}
+
+// Ctrl-C inside the optimization (QUIJIBO_TEST_SIGNAL_AFTER_STEP): the optimizer writes its
+// checkpoint, the run exits 130 with one line, the report names no map that is not there, and
+// --resume continues from the checkpoint.
+TEST(RunTest, AnInterruptedOptimizationKeepsItsCheckpointAndSaysSo) {
+  const std::string dir = TempDir("interrupt_opt");
+  const std::string exp = dir + "/tiny.json", out = dir + "/results";
+  Write(exp, Tiny().dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  json changed = Tiny();
+  changed["optimizer"]["max_iterations"]["F"] = 14;  // the optimization and what follows compute again
+  Write(exp, changed.dump(1));
+  EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err, nullptr, 0, "QUIJIBO_TEST_SIGNAL_AFTER_STEP=3"), 130)
+      << err;
+  const std::string line = err.substr(err.rfind("quijibo: "));  // after the optimizer's table
+  interrupt::ExpectInterruptLine(line, "optimize (optimized");
+  EXPECT_TRUE(fs::exists(out + "/optimized/checkpoint.json"));
+  EXPECT_FALSE(fs::exists(out + "/optimized/map.json"));
+  for (const char* gone : {"mesh", "pictures", "plot"}) EXPECT_FALSE(fs::exists(out + "/" + gone)) << gone;
+  const std::string report = Slurp(out + "/report.md");
+  EXPECT_EQ(report.rfind("# tiny (INCOMPLETE)", 0), 0u) << report;
+  EXPECT_EQ(report.find("optimized/map.json"), std::string::npos) << report;
+  EXPECT_NE(report.find("optimized/checkpoint.json"), std::string::npos) << report;
+  interrupt::ExpectOnlyThisRunsStages(out);
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--resume", "--quiet"}, &err), 0) << err;
+  bool resumed = false;
+  for (const json& s : json(RunRecord(out)["stages"])) resumed |= s["status"] == "resumed";
+  EXPECT_TRUE(resumed) << RunRecord(out).dump();
+  EXPECT_EQ(Slurp(out + "/report.md").find("INCOMPLETE"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+namespace quality {
+
+// An experiment that keeps the initial map (`map` file) as the result: passes that cannot move
+// (tolerance 1e9, as in PassesThatCannotMoveAreReportedNotFatal) on an analytic target.
+json Kept(const std::string& target, const std::string& map, int n) {
+  return {{"name", "kept"},
+          {"target", {{"analytic", target}, {"resolution", 16}}},
+          {"initial", {{"kind", "map"}, {"map", map}}},
+          {"optimizer",
+           {{"schedule", json::parse(R"({"levels": [{"resolution": 10, "passes": [{"kind": "V", "tolerance": 1e9}]}]})")},
+            {"min_level_fidelity", 0}}},
+          {"mesh", {{"resolution", 16}, {"iterations", n}}},
+          {"pictures", {{"enabled", false}}},
+          {"outputs", {{"plot", false}}}};
+}
+
+// A map of one root at the origin: R(q) = C q^{+-1}.
+std::string OneRootMap(bool top, double ln_C) {
+  const json root = json::array({json{{"root", {0.0, 0.0, 0.0, 0.0}}, {"exponent", 1.0}}});
+  return json{{"format", "quijibo-map"}, {"version", 1}, {"ln_C", ln_C}, {"tau", 1.0}, {"beta", 1.0},
+              {"top", top ? root : json::array()}, {"bottom", top ? json::array() : root}}
+      .dump(1);
+}
+
+// The warnings of run.json, all in one string, and checks that report.md states each of them.
+std::string Warnings(const std::string& out) {
+  const json run = RunRecord(out);
+  std::string all;
+  const std::string report = Slurp(out + "/report.md");
+  EXPECT_NE(report.find("## Quality"), std::string::npos) << report;
+  for (const json& w : run["quality"]["warnings"]) {
+    all += w.get<std::string>() + "\n";
+    EXPECT_NE(report.find("**Warning:** " + w.get<std::string>()), std::string::npos) << w;
+  }
+  return all;
+}
+
+}  // namespace quality
+
+// The exact one-step sphere (R = q, the unit ball) meshed at n = 1: the figures are in report.md
+// and run.json, and no threshold fires on a good result.
+TEST(RunTest, AGoodResultIsReportedWithItsFiguresAndNoWarning) {
+  const std::string dir = TempDir("quality_good");
+  Write(dir + "/map.json", quality::OneRootMap(true, 0.0));
+  Write(dir + "/e.json", quality::Kept("sphere", "map.json", 1).dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", dir + "/e.json", "--out", dir + "/r", "--quiet"}, &err), 0) << err;
+  const json q = RunRecord(dir + "/r")["quality"];
+  EXPECT_GT(q["figures"]["one_step"]["iou"].get<double>(), 0.9) << q;
+  EXPECT_EQ(q["figures"]["one_step"]["leak"], 0.0) << q;
+  EXPECT_EQ(q["figures"]["n_step"]["n"], 1) << q;
+  EXPECT_EQ(q["figures"]["mesh"]["components"], 1) << q;
+  EXPECT_EQ(q["figures"]["mesh"]["open_edges_inside"], 0) << q;
+  EXPECT_EQ(q["figures"]["start"]["inverted"], false) << q;
+  EXPECT_EQ(quality::Warnings(dir + "/r"), "");
+  EXPECT_NE(Slurp(dir + "/r/report.md").find("No warning."), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// R = C / q with ln C = -50 on the torus: |R| < 1 almost everywhere, so the one-step set and the
+// n = 3 set (q_2 = q, q_3 = C / q) fill the box and leak far beyond the shape box, L falls outward
+// (inverted) and tanh is flat everywhere (saturated); the torus's centre, the fractal origin, is
+// outside it: each of these is a warning, in run.json and report.md.
+TEST(RunTest, ASetThatFillsTheBoxFromAnInvertedSaturatedStartIsWarnedAbout) {
+  const std::string dir = TempDir("quality_bad");
+  Write(dir + "/map.json", quality::OneRootMap(false, -50.0));
+  Write(dir + "/e.json", quality::Kept("torus", "map.json", 3).dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", dir + "/e.json", "--out", dir + "/r", "--quiet"}, &err), 0) << err;
+  const std::string w = quality::Warnings(dir + "/r");
+  for (const char* expect : {"the one-step set leaks", "the n = 3 set fills the box", "the n = 3 set leaks",
+                             "the start is inverted", "the start is saturated",
+                             "one-step set does not follow the shape", "origin lies outside the shape"})
+    EXPECT_NE(w.find(expect), std::string::npos) << expect << " in\n" << w;
+  fs::remove_all(dir);
+}
+
+// The shape modulus of a torus (64 triangles): the iteration's origin, the box centre, lies in the
+// hole, outside the shape; the run warns on stderr, in run.json and in report.md.
+TEST(RunTest, AShapeModulusWhoseOriginIsOutsideTheShapeIsWarnedAbout) {
+  const std::string dir = TempDir("quality_modulus");
+  std::ostringstream obj;
+  const int u = 8, v = 4;  // 8 x 4 quads, 64 triangles
+  const double pi = 3.14159265358979323846;
+  for (int i = 0; i < u; ++i)
+    for (int j = 0; j < v; ++j) {
+      const double a = 2 * pi * i / u, b = 2 * pi * j / v, r = 1.0 + 0.35 * std::cos(b);
+      obj << "v " << r * std::cos(a) << " " << r * std::sin(a) << " " << 0.35 * std::sin(b) << "\n";
+    }
+  auto id = [&](int i, int j) { return (i % u) * v + (j % v) + 1; };
+  for (int i = 0; i < u; ++i)
+    for (int j = 0; j < v; ++j) {
+      obj << "f " << id(i, j) << " " << id(i + 1, j) << " " << id(i + 1, j + 1) << "\n";
+      obj << "f " << id(i, j) << " " << id(i + 1, j + 1) << " " << id(i, j + 1) << "\n";
+    }
+  Write(dir + "/torus.obj", obj.str());
+  const json e = {{"name", "torus-modulus"},
+                  {"method", "modulus"},
+                  {"target", {{"mesh", "torus.obj"}}},
+                  {"modulus", {{"sdf_resolution", 24}, {"output", {{"format", "ply"}, {"resolution", 24}, {"iterations", 2}}}}},
+                  {"pictures", {{"enabled", false}}}};
+  Write(dir + "/e.json", e.dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", dir + "/e.json", "--out", dir + "/r", "--quiet"}, &err), 0) << err;
+  EXPECT_NE(err.find("quijibo: warning: the iteration's origin lies outside the shape"), std::string::npos) << err;
+  const json q = RunRecord(dir + "/r")["quality"];
+  EXPECT_EQ(q["figures"]["origin"]["inside"], false) << q;
+  EXPECT_NE(quality::Warnings(dir + "/r").find("origin lies outside the shape"), std::string::npos);
   fs::remove_all(dir);
 }
 

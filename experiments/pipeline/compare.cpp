@@ -70,8 +70,9 @@ std::string CompareOptions::Validate() const {
 CompareResult Compare(const CompareOptions& o) {
   if (std::string why = o.Validate(); !why.empty()) throw Error("compare: " + why);
   Outputs outs;
-  const auto grid = std::make_shared<ScalarGrid>(ReadGrid(o.target));
   const RationalMap rmap = ReadMap(o.map);
+  mesh::CheckSameFrame(rmap.frame, o.map, o.target);
+  const auto grid = std::make_shared<ScalarGrid>(ReadGrid(o.target));
   // QUIJIBO fit time.
   json qj_fit = nullptr;
   if (o.quijibo_seconds) {

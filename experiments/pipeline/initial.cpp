@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "experiments/pipeline/initial_pictures.h"
+#include "mesh/sdf_command.h"
 #include "quijibo/energy.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
@@ -222,10 +223,12 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
     throw Error("initial: \"" + o.kind + "\" needs a mesh target; use \"random\" or \"map\"");
   if (o.kind == "map") {
     res.map = ReadMap(o.map);
+    mesh::CheckSameFrame(res.map.frame, o.map, target.frame, target.source, "the experiment's target");
     return res;
   }
   if (o.kind == "random") {
     res.map = RandomMap(o.random);
+    res.map.frame = target.frame;  // roots drawn about the origin: the target's frame is theirs
     res.map.ln_C = -MedianLogModulus(res.map, MakeEnergyGrid(target.grid, WeightField::kLayer));
     res.map.provenance = {{"made_by", "quijibo run (random initial map)"}, {"seed", o.random.seed}};
     return res;

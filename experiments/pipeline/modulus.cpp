@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 
 #include "mesh/modulus_target.h"
 #include "quijibo/error.h"
@@ -144,12 +145,21 @@ ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions&
   jo.iterations = o.output.iterations.value_or(jo.iterations);
   jo.escape_radius = o.output.escape.value_or(jo.escape_radius);
   res.product = Produce(map, o.output, jo, lt.target, two_d);
+  // The iteration traps orbits at the origin: outside the shape, the set erodes or vanishes
+  // (2023 Fig. 5; the torus's centre).
+  const double phi_origin = lt.target.phi({-so.origin_offset[0], -so.origin_offset[1], -so.origin_offset[2]});
+  if (!(phi_origin < 0))
+    std::fprintf(stderr,
+                 "quijibo: warning: the iteration's origin lies outside the shape (phi %.3g there): the set erodes or "
+                 "vanishes; move the shape over it (modulus.offset, --offset)\n",
+                 phi_origin);
   res.report = {{"command", "modulus"},
                 {"target", lt.info},
                 {"output", out},
                 {"result", res.product.report},
                 {"alpha", ParameterFieldToJson(so.alpha)},
-                {"beta", ParameterFieldToJson(so.beta)}};
+                {"beta", ParameterFieldToJson(so.beta)},
+                {"origin", {{"phi", phi_origin}, {"inside", phi_origin < 0}}}};
   return res;
 }
 

@@ -54,7 +54,9 @@ OptimizeStageResult OptimizeStage(const ScalarGrid& target, const RationalMap& i
                                      {"complete", sum.complete}};
   if (!sum.complete) {
     std::fprintf(stderr, "%s", sum.Report().c_str());
-    throw Error("interrupted; checkpoint written to " + out_dir + "/checkpoint.json; continue with --resume");
+    const std::string what = "checkpoint written to " + out_dir + "/checkpoint.json; continue with --resume";
+    if (sum.signal) throw Interrupted("interrupted (" + SignalName(sum.signal) + "); " + what, sum.signal);
+    throw Error("interrupted; " + what);
   }
   WriteMap(out_dir + "/map.json", res.map);
   return res;

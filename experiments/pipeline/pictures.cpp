@@ -55,15 +55,7 @@ SlicePicture SliceAgainstTargetPicture(const RationalMap& map, const ScalarGrid&
                                        const std::string& precision) {
   if (target.coordinates != "fractal")
     throw Error(target_path + ": expected a grid in fractal coordinates, found \"" + target.coordinates + "\"");
-  const std::string frame_path = mesh::FrameJsonPathFor(target_path);
-  if (fs::exists(frame_path)) {
-    const FractalFrame f = mesh::ReadFrameJson(frame_path);
-    const auto same = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); };
-    if (!same(f.scale, map.frame.scale) || !same(f.fractal_radius, map.frame.fractal_radius) ||
-        !same(f.translation[0], map.frame.translation[0]) || !same(f.translation[1], map.frame.translation[1]) ||
-        !same(f.translation[2], map.frame.translation[2]))
-      throw Error(target_path + ": its frame (" + frame_path + ") differs from the map's: not the same mesh");
-  }
+  mesh::CheckSameFrame(map.frame, "the map", target_path);
   if (auto why = view.validate(); !why.empty()) throw Error("picture: " + why);
   if (auto why = julia.validate(); !why.empty()) throw Error(why);
   const mesh::BatchField field = mesh::MakeJuliaField(map, julia, iso, ParsePrecision(precision));

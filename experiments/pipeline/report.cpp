@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "experiments/pipeline/quality.h"
 #include "experiments/pipeline/run.h"
 #include "quijibo/io.h"
 #include "quijibo/rational_map.h"
@@ -23,16 +24,23 @@ std::string Fixed(double x, int digits) {
 }  // namespace
 
 std::string RunReport(const Experiment& e, const std::vector<StageRecord>& records, const std::string& results,
-                      double total_seconds) {
+                      double total_seconds, const RunState& state) {
   auto P = [&](const std::string& rel) { return results + "/" + rel; };
   std::ostringstream md;
   const std::time_t now = std::time(nullptr);
   char date[64];
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
-  md << "# " << e.name << "\n\n";
+  const bool incomplete = !state.stopped_in.empty();
+  md << "# " << e.name << (incomplete ? " (INCOMPLETE)" : "") << "\n\n";
+  if (incomplete)
+    md << "**INCOMPLETE:** the run stopped in stage " << state.stopped_in << ": " << state.reason
+       << ". What follows is what the stages before it left; the stages after it have no output (a stage that "
+          "computes removes the outputs of the stages that read it). Resume with\n\n    "
+       << state.resume << "\n\n";
   if (!e.description.empty()) md << e.description << "\n\n";
   md << "Experiment `" << e.path << "` (resolved: `experiment.resolved.json`), method " << e.method << ", run " << date
-     << ", " << Fixed(total_seconds, 1) << " s in all.\n\n";
+     << ", " << Fixed(total_seconds, 1) << " s " << (incomplete ? "so far" : "in all") << ".\n\n";
+  md << QualitySection(RunQuality(e, results));  // first: what the figures below are worth
   auto exists = [&](const std::string& rel) { return fs::exists(P(rel)); };
   auto image = [&](const std::string& rel, const std::string& caption) {
     if (exists(rel)) md << "![" << caption << "](" << rel << ")\n\n*" << caption << "* (`" << rel << "`)\n\n";
@@ -70,6 +78,11 @@ std::string RunReport(const Experiment& e, const std::vector<StageRecord>& recor
       const std::string name = o.name;
       const json s = ReadStageFile(P(name + "/summary.json"));
       if (!s.is_object()) continue;
+      if (!exists(name + "/map.json")) {
+        md << "### " << name << ": not finished\n\nNo map yet; the checkpoint `" << name
+           << "/checkpoint.json` continues it (--resume).\n\n";
+        continue;
+      }
       md << "### " << name << ": " << o.optimizer.schedule.notation() << ", " << s.value("evaluator", "")
          << " evaluator, " << s.value("precision", "") << ", " << s.value("backend", "") << "\n\n"
          << "Absolute energy psi " << Fixed(s.value("absolute_start", 0.0), 6) << " -> "

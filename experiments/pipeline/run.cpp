@@ -1,15 +1,23 @@
 #include "experiments/pipeline/run.h"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <map>
+#include <mutex>
+#include <set>
+#include <thread>
 
 #include "experiments/pipeline/plot.h"
+#include "experiments/pipeline/quality.h"
 #include "mesh/fidelity.h"
 #include "mesh/sdf_command.h"
 #include "quijibo/error.h"
@@ -40,11 +48,27 @@ void ReferencedFiles(const json& j, const fs::path& dir, std::vector<std::string
     for (const auto& x : j) ReferencedFiles(x, dir, out);
 }
 
+// A word for a command line to copy: quoted when the shell would split or expand it.
+std::string ShellWord(const std::string& w) {
+  if (!w.empty() && w.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./=+:,@") ==
+                        std::string::npos)
+    return w;
+  std::string q = "'";
+  for (char c : w) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 class Runner {
  public:
-  Runner(const Experiment& e, const std::string& results, const RunOptions& o)
+  Runner(const Experiment& e, const std::string& results, const RunOptions& o, bool created)
       : e_(e),
         quiet_(o.quiet),
+        results_(results),
+        created_(created),
+        signals_(o.handle_signals),
+        resume_("quijibo run " + (e.path.empty() ? std::string("EXPERIMENT.json") : ShellWord(e.path)) + " --out " +
+                ShellWord(results) + " --resume"),
+        t0_(std::chrono::steady_clock::now()),
         cache_(
             results, o.resume, [this](const std::string& what) { Announce(what); },
             [this](const std::string& what) {
@@ -54,33 +78,210 @@ class Runner {
               if (!quiet_)
                 std::fprintf(stderr, "quijibo:       %s %s (%s)\n", r.name.c_str(), r.status.c_str(),
                              FormatDuration(r.seconds).c_str());
+              const std::lock_guard<std::mutex> lock(mu_);
+              records_.push_back(r);
+              computing_.clear();
+            },
+            [this](const std::string& folder) {
+              Computing(folder);
+              TestSignal(folder);
             }) {}
 
   void Quijibo();
   void Modulus();
   void Portal();
   const std::vector<StageRecord>& records() const { return cache_.records(); }
+  double Seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
+  const std::string& resume_command() const { return resume_; }
+
+  // The run stopped on an error: report.md and run.json say where and why (as far as the disk
+  // lets them: the error may be a full disk), and a results folder this run created goes again
+  // when no stage finished. Returns the stage it stopped in.
+  std::string Failed(const std::string& reason) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    try {
+      WriteStatus(reason);
+    } catch (...) {
+    }
+    RemoveIfNothingFinished();
+    return stage_;
+  }
+
+  // SIGINT/SIGTERM outside the optimization (SignalWatcher's thread): the unfinished stage's
+  // partial folder goes, report.md says INCOMPLETE, one line on stderr, exit 128 + signal.
+  [[noreturn]] void Stop(int signal) {
+    mu_.lock();  // held to the end: the main thread writes no more status
+    const std::string why = "interrupted (" + SignalName(signal) + ")";
+    std::error_code ec;
+    if (!computing_.empty() && !in_place_.count(computing_)) fs::remove_all(P(computing_ + ".partial"), ec);
+    std::string line;
+    if (finished_) {
+      line = "quijibo: " + why + " after the run finished\n";
+    } else {
+      try {
+        WriteStatus(why);
+      } catch (...) {
+      }
+      line = "quijibo: " + why + " in stage " + (stage_.empty() ? std::string("(none yet)") : stage_) +
+             (RemoveIfNothingFinished() ? "; nothing finished, the results folder is removed"
+                                        : (e_.outputs.report ? "; report.md says INCOMPLETE" : "")) +
+             "; resume with: " + resume_ + "\n";
+    }
+    [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, line.data(), line.size());
+    ::_exit(128 + signal);
+  }
+  void Finished() {
+    const std::lock_guard<std::mutex> lock(mu_);
+    finished_ = true;
+  }
+  // experiment.resolved.json and run.json (`state` null: the run is complete).
+  nlohmann::json ResolvedJson() const {
+    json j = e_.ToJson();
+    j["results"] = fs::absolute(results_).lexically_normal().string();
+    return j;
+  }
+  nlohmann::json RunJson(const std::vector<StageRecord>& records, double seconds, const RunState* state) const {
+    json run = {{"experiment", e_.path}, {"name", e_.name}, {"seconds", seconds}, {"stages", json::array()}};
+    for (const auto& r : records)
+      run["stages"].push_back({{"stage", r.name}, {"status", r.status}, {"seconds", r.seconds}, {"hash", r.hash}});
+    run["complete"] = state == nullptr;
+    if (json q = RunQuality(e_, results_); !q.is_null()) run["quality"] = q;
+    if (state) run["stopped"] = {{"stage", state->stopped_in}, {"reason", state->reason}, {"resume", state->resume}};
+    return run;
+  }
 
  private:
   void Announce(const std::string& what) {
     ++index_;
+    {
+      const std::lock_guard<std::mutex> lock(mu_);
+      stage_ = what;
+    }
     if (!quiet_) std::fprintf(stderr, "quijibo: [%d/%d] %s\n", index_, total_, what.c_str());
   }
+  // A stage is about to compute: its earlier output is not this run's, and what read it no longer
+  // matches, so the stage and the stages downstream lose their folders now (the optimization keeps
+  // its own, the checkpoint of --resume), and the run says INCOMPLETE until it ends.
+  void Computing(const std::string& folder) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    computing_ = folder;
+    std::error_code ec;
+    if (!in_place_.count(folder)) fs::remove_all(P(folder), ec);
+    for (const std::string& d : downstream_[folder]) {
+      fs::remove_all(P(d), ec);
+      fs::remove_all(P(d + ".partial"), ec);
+    }
+    if (!wrote_resolved_) {
+      WriteFileAtomically(P("experiment.resolved.json"), ResolvedJson().dump(2) + "\n");
+      wrote_resolved_ = true;
+    }
+    WriteStatus("the run is computing this stage, or was killed or crashed in it");
+  }
+  // QUIJIBO_TEST_SIGNAL_IN_STAGE=<folder>: a Ctrl-C as that stage starts computing, for the tests
+  // (no timing); SignalWatcher's thread then ends the process.
+  void TestSignal(const std::string& folder) const {
+    static const char* stage = std::getenv("QUIJIBO_TEST_SIGNAL_IN_STAGE");
+    if (!signals_ || !stage || folder != stage) return;
+    std::raise(SIGINT);
+    for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
+  }
+  // report.md and run.json of a run that has not finished. Call with mu_ held.
+  void WriteStatus(const std::string& reason) {
+    const RunState state{stage_, reason, resume_};
+    WriteFileAtomically(P("run.json"), RunJson(records_, Seconds(), &state).dump(1) + "\n");
+    std::error_code ec;
+    if (e_.outputs.report)
+      WriteFileAtomically(P("report.md"), RunReport(e_, records_, results_, Seconds(), state));
+    else
+      fs::remove(P("report.md"), ec);
+  }
+  // Call with mu_ held.
+  bool RemoveIfNothingFinished() {
+    std::error_code ec;
+    if (!created_ || !records_.empty()) return false;
+    fs::remove_all(results_, ec);
+    return true;
+  }
+
   std::string P(const std::string& rel) const { return cache_.Path(rel); }
   // The render of a modulus or portal mesh.
   void RenderStage(const std::string& mesh, const std::string& upstream);
 
   const Experiment& e_;
   bool quiet_;
+  std::string results_;
+  bool created_, signals_;
+  std::string resume_;
+  std::chrono::steady_clock::time_point t0_;
+  // The folders of the stages that read each stage's output (by folder), and the stages that
+  // compute in their folder rather than in "<folder>.partial".
+  std::map<std::string, std::vector<std::string>> downstream_;
+  std::set<std::string> in_place_;
+  // What the run has done, guarded by mu_ for SignalWatcher's thread.
+  std::mutex mu_;
+  std::string stage_, computing_;
+  std::vector<StageRecord> records_;
+  bool finished_ = false, wrote_resolved_ = false;
   StageCache cache_;
   int index_ = 0, total_ = 0;
+};
+
+// SIGINT/SIGTERM for the life of a run. The handler only writes the signal to a pipe; a thread
+// reads it and, as ordinary code, calls `stop` (which ends the process). The optimization installs
+// its own handlers while it runs (it checkpoints and returns), and puts these back.
+int g_signal_pipe[2] = {-1, -1};
+extern "C" void OnRunSignal(int signal) {
+  const unsigned char b = static_cast<unsigned char>(signal);
+  [[maybe_unused]] const ssize_t n = ::write(g_signal_pipe[1], &b, 1);
+}
+
+class SignalWatcher {
+ public:
+  explicit SignalWatcher(std::function<void(int)> stop) {
+    if (::pipe(g_signal_pipe) != 0) throw Error(std::string("cannot watch for signals: ") + std::strerror(errno));
+    thread_ = std::thread([stop = std::move(stop)] {
+      unsigned char b = 0;
+      while (::read(g_signal_pipe[0], &b, 1) < 0 && errno == EINTR) {
+      }
+      if (b != 0) stop(b);
+    });
+    struct sigaction sa {};
+    sa.sa_handler = OnRunSignal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~SignalWatcher() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+    const unsigned char done = 0;
+    [[maybe_unused]] const ssize_t n = ::write(g_signal_pipe[1], &done, 1);
+    thread_.join();
+    ::close(g_signal_pipe[0]);
+    ::close(g_signal_pipe[1]);
+  }
+  SignalWatcher(const SignalWatcher&) = delete;
+  SignalWatcher& operator=(const SignalWatcher&) = delete;
+
+ private:
+  std::thread thread_;
+  struct sigaction old_int_ {}, old_term_ {};
 };
 
 void Runner::Quijibo() {
   const TargetOptions& t = *e_.target;
   const InitialGuessStageOptions& in = e_.initial;
   const bool plot = e_.outputs.plot;
-  total_ = 1 + int(e_.optimizers.size()) + (plot ? 1 : 0) + (e_.mesh.enabled ? 1 : 0) + (e_.pictures.enabled ? 1 : 0);
+  total_ = 2 + int(e_.optimizers.size()) + (plot ? 1 : 0) + (e_.mesh.enabled ? 1 : 0) + (e_.pictures.enabled ? 1 : 0);
+  downstream_["initial"] = {"plot", "mesh", "pictures", "fidelity"};
+  for (const OptimizeStageOptions& o : e_.optimizers) {
+    downstream_["initial"].push_back(o.name);
+    downstream_[o.name] = {"plot"};
+    if (o.name == e_.chosen_optimizer().name)
+      downstream_[o.name].insert(downstream_[o.name].end(), {"mesh", "pictures", "fidelity"});
+    in_place_.insert(o.name);
+  }
+  downstream_["mesh"] = {"pictures"};
 
   // 1. initial: the target grid and the initial map.
   std::vector<std::string> files;
@@ -171,6 +372,35 @@ void Runner::Quijibo() {
                  Pictures(e_.pictures, ReadMap(P("initial/map.json")), ReadMap(map_path), P("initial/target.qgrid"),
                           has_mesh ? P("mesh/julia.ply") : "", dir);
                });
+
+  // 6. fidelity: the figures and the start check behind report.md's Quality section (quality.h),
+  // at the n and iso of the mesh.
+  const double alpha = chosen.optimizer.energy.alpha;
+  // The set the mesh shows, without its placement and root transforms (they move it off the target).
+  JuliaOptions set;
+  set.iterations = e_.mesh.julia.iterations;
+  set.escape_radius = e_.mesh.julia.escape_radius;
+  set.slice = e_.mesh.julia.slice;
+  if (e_.mesh.translate)
+    for (std::size_t a = 0; a < e_.mesh.translate->size(); ++a) set.root_translation[a] = (*e_.mesh.translate)[a];
+  QualityOptions qo;
+  qo.detail = e_.mesh.detail;
+  qo.reference_frame = e_.mesh.iteration_frame == "reference";
+  cache_.Run("fidelity", "fidelity",
+             {{"julia", JuliaJson(set, e_.mesh.iso, "double")}, {"alpha", alpha},
+              {"lattice", qo.lattice}, {"detail", qo.detail}, {"iteration_frame", e_.mesh.iteration_frame}},
+             {}, {initial_hash, chosen_hash}, [&](const std::string& dir) {
+               // The start check of the fits is in monopoles.json already (same map, grid and alpha
+               // only when the energy's alpha is the guess's: else it is made again).
+               const json monopoles = ReadStageFile(P("initial/monopoles.json"));
+               const bool same_alpha = e_.initial.guess.alpha == alpha;
+               const json q = MeasureQuality(ReadMap(P("initial/map.json")), ReadMap(map_path),
+                                             ReadGrid(P("initial/target.qgrid")), set, e_.mesh.iso, alpha,
+                                             monopoles.is_object() && same_alpha ? monopoles.value("start", json())
+                                                                                 : json(),
+                                             qo);
+               WriteFileAtomically(dir + "/fidelity.json", q.dump(1) + "\n");
+             });
 }
 
 void Runner::RenderStage(const std::string& mesh, const std::string& upstream) {
@@ -184,6 +414,7 @@ void Runner::Modulus() {
   const ModulusStageOptions& m = e_.modulus;
   const bool render = e_.pictures.enabled && m.output.format == "ply";
   total_ = 1 + (render ? 1 : 0);
+  downstream_["modulus"] = {"pictures"};
   std::vector<std::string> files;
   const std::string spec = t.mesh.empty() ? (t.qgrid.empty() ? t.analytic : t.qgrid) : t.mesh;
   if (t.analytic.empty()) files.push_back(spec);
@@ -206,6 +437,7 @@ void Runner::Portal() {
   const PortalStageOptions& p = e_.portal;
   const bool render = e_.pictures.enabled && p.output.format == "ply";
   total_ = 1 + (render ? 1 : 0);
+  downstream_["portal"] = {"pictures"};
   std::vector<std::string> files;
   if (!p.spec_file.empty()) {
     files.push_back(p.spec_file);
@@ -254,28 +486,35 @@ RunSummary RunExperiment(const Experiment& e, const RunOptions& o) {
   bool created = false;
   summary.results = PrepareResults(out, &created);
   summary.resolved["results"] = summary.results;
-  const auto t0 = std::chrono::steady_clock::now();
-  Runner runner(e, out, o);
-  try {
-    if (e.method == "quijibo")
-      runner.Quijibo();
-    else if (e.method == "modulus")
-      runner.Modulus();
-    else
-      runner.Portal();
-  } catch (...) {
-    // A folder this run created and left empty goes again.
-    std::error_code ec;
-    if (created && fs::is_empty(out, ec)) fs::remove(out, ec);
-    throw;
+  Runner runner(e, out, o, created);
+  {
+    std::unique_ptr<SignalWatcher> watcher;
+    if (o.handle_signals) watcher = std::make_unique<SignalWatcher>([&runner](int signal) { runner.Stop(signal); });
+    try {
+      if (e.method == "quijibo")
+        runner.Quijibo();
+      else if (e.method == "modulus")
+        runner.Modulus();
+      else
+        runner.Portal();
+    } catch (const Interrupted& x) {
+      const std::string stage = runner.Failed(x.what());
+      throw Interrupted("interrupted (" + SignalName(x.signal) + ") in stage " + stage +
+                            ": the checkpoint is kept; resume with: " + runner.resume_command(),
+                        x.signal);
+    } catch (const Error& x) {
+      runner.Failed(x.what());
+      throw;
+    } catch (const std::exception& x) {
+      runner.Failed(x.what());
+      throw;
+    }
+    runner.Finished();
   }
   summary.stages = runner.records();
-  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  json run = {{"experiment", e.path}, {"name", e.name}, {"seconds", summary.seconds}, {"stages", json::array()}};
-  for (const auto& r : summary.stages)
-    run["stages"].push_back({{"stage", r.name}, {"status", r.status}, {"seconds", r.seconds}, {"hash", r.hash}});
+  summary.seconds = runner.Seconds();
   WriteFileAtomically(out + "/experiment.resolved.json", summary.resolved.dump(2) + "\n");
-  WriteFileAtomically(out + "/run.json", run.dump(1) + "\n");
+  WriteFileAtomically(out + "/run.json", runner.RunJson(summary.stages, summary.seconds, nullptr).dump(1) + "\n");
   if (e.outputs.report) WriteFileAtomically(out + "/report.md", RunReport(e, summary.stages, out, summary.seconds));
   if (!o.quiet) {
     std::fprintf(stderr, "quijibo: done in %s. Results in %s/\n", FormatDuration(summary.seconds).c_str(), out.c_str());

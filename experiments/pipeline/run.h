@@ -17,6 +17,9 @@ struct RunOptions {
   bool resume = false;      // continue an interrupted optimization from its checkpoint
   bool check_only = false;  // validate only: nothing is written (RunSummary::resolved holds the experiment)
   bool quiet = false;       // no progress on stderr
+  // SIGINT and SIGTERM end the run with report.md INCOMPLETE, one line on stderr and exit code
+  // 128 + signal (the command line; a host such as Python keeps its own handlers).
+  bool handle_signals = false;
 };
 
 struct RunSummary {
@@ -26,12 +29,23 @@ struct RunSummary {
   nlohmann::json resolved;  // the resolved experiment (with "results" when it ran)
 };
 
-// Runs (or, with check_only, only resolves) the experiment. A results folder this run created and
-// left empty is removed on failure. Throws quijibo::Error.
+// Runs (or, with check_only, only resolves) the experiment. Before a stage computes (is not
+// reused), the folders of the stages that read its output are removed and report.md and run.json
+// say INCOMPLETE until the run ends, so a run that stops never leaves results of other settings
+// beside its own (docs/experiments.md). A results folder this run created is removed when the run
+// fails before a stage finished. Throws quijibo::Error (quijibo::Interrupted when the optimization
+// stopped on a signal).
 RunSummary RunExperiment(const Experiment& experiment, const RunOptions& options);
 
-// report.md of a finished run in `results` (experiments/pipeline/report.cpp).
+// How a run ended, for report.md: complete, or where and why it stopped.
+struct RunState {
+  std::string stopped_in;  // the stage; empty: the run is complete
+  std::string reason;      // why it stopped (or that it is still running)
+  std::string resume;      // the command that continues it
+};
+
+// report.md of a run in `results` (experiments/pipeline/report.cpp).
 std::string RunReport(const Experiment& experiment, const std::vector<StageRecord>& stages, const std::string& results,
-                      double total_seconds);
+                      double total_seconds, const RunState& state = {});
 
 }  // namespace quijibo::pipeline

@@ -46,12 +46,14 @@ json ReadStageFile(const std::string& path) {
 }
 
 StageCache::StageCache(std::string results, bool resume, std::function<void(const std::string&)> announce,
-                       std::function<void(const std::string&)> note, std::function<void(const StageRecord&)> done)
+                       std::function<void(const std::string&)> note, std::function<void(const StageRecord&)> done,
+                       std::function<void(const std::string&)> computing)
     : results_(std::move(results)),
       resume_(resume),
       announce_(std::move(announce)),
       note_(std::move(note)),
-      done_(std::move(done)) {}
+      done_(std::move(done)),
+      computing_(std::move(computing)) {}
 
 std::string StageCache::Run(const std::string& name, const std::string& folder, const json& inputs,
                             const std::vector<std::string>& files, const std::vector<std::string>& upstream,
@@ -70,6 +72,7 @@ std::string StageCache::Run(const std::string& name, const std::string& folder, 
   fs::create_directories(partial);
   const auto t0 = std::chrono::steady_clock::now();
   try {
+    if (computing_) computing_(folder);
     compute(partial);
   } catch (...) {
     std::error_code ec;
@@ -105,6 +108,7 @@ std::string StageCache::RunInPlace(const std::string& stage, const std::string& 
   const bool can_resume = resume_ && pending.is_object() && pending.value("hash", "") == hash &&
                           fs::is_regular_file(dir + "/checkpoint.json", ec);
   if (resume_ && !can_resume) note_("no checkpoint of these settings in " + dir + ": starting the optimization afresh");
+  if (computing_) computing_(folder);
   double earlier = 0;
   if (!can_resume) {
     fs::remove_all(dir);

@@ -27,9 +27,10 @@ struct StageRecord {
 class StageCache {
  public:
   // `announce` is told each stage as it starts, `note` what a stage has to say, `done` each record
-  // as it ends.
+  // as it ends, `computing` the folder of each stage that is not reused, before it computes.
   StageCache(std::string results, bool resume, std::function<void(const std::string&)> announce,
-             std::function<void(const std::string&)> note, std::function<void(const StageRecord&)> done);
+             std::function<void(const std::string&)> note, std::function<void(const StageRecord&)> done,
+             std::function<void(const std::string& folder)> computing = nullptr);
 
   // A stage into `folder` of the results: reused when its hash matches, else `compute(dir)` fills
   // a fresh folder, renamed into place when it returns. Returns the hash.
@@ -52,6 +53,7 @@ class StageCache {
   bool resume_;
   std::function<void(const std::string&)> announce_, note_;
   std::function<void(const StageRecord&)> done_;
+  std::function<void(const std::string&)> computing_;
   std::vector<StageRecord> records_;
 };
 

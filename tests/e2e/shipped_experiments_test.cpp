@@ -95,6 +95,7 @@ std::vector<std::string> ExpectedStages(const json& e) {
   if (e["outputs"]["plot"].get<bool>()) s.push_back("plot");
   if (e["mesh"]["enabled"].get<bool>()) s.push_back("mesh");
   if (e["pictures"]["enabled"].get<bool>()) s.push_back("pictures");
+  s.push_back("fidelity");  // report.md's Quality figures
   return s;
 }
 

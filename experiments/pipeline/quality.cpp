@@ -1,0 +1,157 @@
+#include "experiments/pipeline/quality.h"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "experiments/pipeline/stage_cache.h"
+#include "monopole/kernel_fit.h"
+
+namespace quijibo::pipeline {
+
+using nlohmann::json;
+
+namespace {
+
+std::string Decimals(double x, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
+  return buf;
+}
+
+}  // namespace
+
+json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const ScalarGrid& target,
+                    const JuliaOptions& julia, double iso, double alpha, const json& start,
+                    const QualityOptions& options) {
+  mesh::FidelityOptions o;
+  o.lattice = options.lattice;
+  o.julia = julia;
+  o.iso = iso;
+  o.detail = options.detail;
+  o.reference_frame = options.reference_frame;
+  const mesh::Fidelity f = mesh::MeasureSets(chosen, target, o);
+  json j = f.ToJson();
+  j["lattice"] = o.lattice;
+  j["iterations"] = julia.iterations;
+  // Orbits are trapped at the fractal origin (docs/fidelity.md §3): phi there, outside the grid
+  // counted as outside.
+  const Vec3 lo = target.frame.min_corner, ext = target.frame.extent();
+  bool in_grid = true;
+  for (int a = 0; a < 3; ++a) in_grid = in_grid && lo[a] <= 0 && 0 <= lo[a] + ext[a];
+  const double phi0 = in_grid ? target.sample({0.0, 0.0, 0.0}) : 1.0;
+  j["origin"] = {{"phi", phi0}, {"inside", phi0 < 0}};
+  if (start.is_object()) {
+    j["start"] = start;
+    return j;
+  }
+  const monopole::StartCheck s = monopole::CheckStart(initial, target, alpha);
+  j["start"] = {{"iou", s.iou},
+                {"median_L_inside", s.median_inside},
+                {"median_L_outside", s.median_outside},
+                {"saturated_fraction", s.saturated},
+                {"inverted", s.inverted}};
+  return j;
+}
+
+json RunQuality(const Experiment& e, const std::string& results, const QualityThresholds& t) {
+  auto P = [&](const std::string& rel) { return results + "/" + rel; };
+  json figures = json::object(), warnings = json::array();
+  auto warn = [&](const std::string& w) { warnings.push_back(w); };
+  const json f = ReadStageFile(P("fidelity/fidelity.json"));
+  if (f.is_object()) {
+    const double lattice_nodes = std::pow(double(f.value("lattice", QualityOptions().lattice)), 3);
+    const int n = f.value("iterations", 0);
+    figures["lattice"] = f["lattice"];
+    figures["one_step"] = {{"iou", f["one_step"]["iou"]}, {"leak", f["one_step"]["leak"]}};
+    const double iou1 = f["one_step"].value("iou", 0.0), leak1 = f["one_step"].value("leak", 0.0);
+    if (iou1 < t.min_iou)
+      warn("the optimized map's one-step set does not follow the shape: one-step IoU " + Decimals(iou1, 3) +
+           " (below " + Decimals(t.min_iou, 2) + ")");
+    if (leak1 > t.max_leak)
+      warn("the one-step set leaks: its part outside the shape box is " + Decimals(leak1, 3) +
+           " of the shape's volume (above " + Decimals(t.max_leak, 2) + ")");
+    if (f.contains("n_step")) {
+      const double iou = f["n_step"].value("iou", 0.0), leak = f["n_step"].value("leak", 0.0);
+      const double fill = double(f["n_step"].value("set_nodes", 0LL)) / lattice_nodes;
+      figures["n_step"] = {{"n", n}, {"iou", iou}, {"leak", leak}, {"fill", fill}};
+      const std::string set = "the n = " + std::to_string(n) + " set";
+      if (fill > t.max_fill)
+        warn(set + " fills the box: " + Decimals(fill, 3) + " of the lattice is in it (above " + Decimals(t.max_fill, 2) +
+             "; the shape box is 0.36 of it); the mesh is not the shape");
+      // At n = 1 the n-step set is the one-step set: its IoU and leak are warned about above.
+      if (leak > t.max_leak && n > 1)
+        warn(set + " leaks: its part outside the shape box is " + Decimals(leak, 3) + " of the shape's volume (above " +
+             Decimals(t.max_leak, 2) + ")");
+      if (iou < t.min_iou && n > 1)
+        warn(set + " does not follow the shape: n-step IoU " + Decimals(iou, 3) + " (below " + Decimals(t.min_iou, 2) +
+             ", one-step " + Decimals(iou1, 3) + "); try fewer iterations (mesh.iterations) or look at the slices");
+    }
+    const json& s = f["start"];
+    figures["start"] = {{"iou", s["iou"]}, {"saturated", s["saturated_fraction"]}, {"inverted", s["inverted"]}};
+    if (s.value("inverted", false))
+      warn("the start is inverted: L is not lower inside the shape than outside (medians " +
+           Decimals(s.value("median_L_inside", 0.0), 3) + " inside, " + Decimals(s.value("median_L_outside", 0.0), 3) +
+           " outside)");
+    if (s.value("saturated_fraction", 0.0) > t.max_saturated)
+      warn("the start is saturated: tanh(alpha L) is flat in " + Decimals(s.value("saturated_fraction", 0.0), 3) +
+           " of the cells (above " + Decimals(t.max_saturated, 2) + "), where the optimizer has no gradient");
+  }
+  const json ms = ReadStageFile(P("mesh/summary.json"));
+  if (ms.is_object()) {
+    figures["mesh"] = {{"triangles", ms.value("triangles", 0LL)},
+                       {"components", ms.value("components", 0LL)},
+                       {"open_edges", ms.value("open_edges", ms.value("boundary_edges", 0LL))},
+                       {"open_edges_inside", ms.value("open_edges_inside", 0LL)}};
+    if (ms.value("open_edges_inside", 0LL) > 0)
+      warn("the mesh is not closed: " + std::to_string(ms.value("open_edges_inside", 0LL)) +
+           " open edges away from the box faces");
+  }
+  // The same trap for both methods; what moves the origin differs.
+  const json mod = ReadStageFile(P("modulus/modulus.json"));
+  const json origin = mod.is_object() && mod.contains("origin") ? mod["origin"]
+                      : f.is_object() && f.contains("origin") ? f["origin"]
+                                                              : json();
+  if (origin.is_object()) {
+    figures["origin"] = origin;
+    if (!origin.value("inside", true))
+      warn("the iteration's origin lies outside the shape (phi " + Decimals(origin.value("phi", 0.0), 3) +
+           " there): orbits are trapped at it, so the n-step set erodes or vanishes; " +
+           (mod.is_object() ? "move the shape over it (modulus.offset, --offset)"
+                            : "for a mesh target, target.origin \"inside\" (the default) puts it deep inside"));
+  }
+  (void)e;
+  if (figures.empty()) return nullptr;
+  return {{"figures", figures}, {"warnings", warnings}};
+}
+
+std::string QualitySection(const json& q) {
+  if (q.is_null()) return {};
+  std::ostringstream md;
+  const json& f = q["figures"];
+  md << "## Quality\n\n";
+  for (const json& w : q["warnings"]) md << "**Warning:** " << w.get<std::string>() << ".\n\n";
+  if (q["warnings"].empty()) md << "No warning.\n\n";
+  md << "| figure | value |\n|---|---|\n";
+  if (f.contains("one_step"))
+    md << "| one-step IoU / leak (" << f.value("lattice", 0) << "^3 lattice) | " << Decimals(f["one_step"]["iou"], 3)
+       << " / " << Decimals(f["one_step"]["leak"], 3) << " |\n";
+  if (f.contains("n_step"))
+    md << "| n-step (n = " << f["n_step"].value("n", 0) << ") IoU / leak / fill | " << Decimals(f["n_step"]["iou"], 3)
+       << " / " << Decimals(f["n_step"]["leak"], 3) << " / " << Decimals(f["n_step"]["fill"], 3) << " |\n";
+  if (f.contains("mesh"))
+    md << "| mesh components / open edges (away from the box faces) | " << f["mesh"]["components"].get<long long>()
+       << " / " << f["mesh"]["open_edges"].get<long long>() << " (" << f["mesh"]["open_edges_inside"].get<long long>()
+       << ") |\n";
+  if (f.contains("start"))
+    md << "| start: one-step IoU / saturated cells / inverted | " << Decimals(f["start"]["iou"], 3) << " / "
+       << Decimals(f["start"]["saturated"], 3) << " / " << (f["start"]["inverted"].get<bool>() ? "**yes**" : "no")
+       << " |\n";
+  if (f.contains("origin"))
+    md << "| origin inside the shape (phi there) | " << (f["origin"].value("inside", true) ? "yes" : "**no**") << " ("
+       << Decimals(f["origin"].value("phi", 0.0), 3) << ") |\n";
+  md << "\nFigures: `mesh/fidelity.h`, docs/fidelity.md; thresholds of the warnings: docs/experiments.md.\n\n";
+  return md.str();
+}
+
+}  // namespace quijibo::pipeline
