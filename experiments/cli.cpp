@@ -30,6 +30,7 @@ void WriteOutput(const std::string& path, const std::string& text) {
     std::fwrite(text.data(), 1, text.size(), stdout);
     std::fflush(stdout);
   } else {
+    CreateParentFolder(path);
     WriteFileAtomically(path, text);
   }
 }
@@ -237,6 +238,7 @@ void AddMapCommand(CLI::App& app) {
       const EnergyGrid grid = MakeEnergyGrid(LoadTarget(*target, *target_res), WeightField::kLayer);
       map.ln_C = -MedianLogModulus(map, grid);
     }
+    CreateParentFolder(*out);
     WriteMap(*out, map);
   });
   auto path = std::make_shared<std::string>();
@@ -264,7 +266,11 @@ void AddTargetCommand(CLI::App& app) {
   t->add_option("shape", *shape, "sphere[:radius=R] or torus[:major=R,minor=r]")->required();
   t->add_option("-r,--resolution", *res, "Cells per axis")->capture_default_str()->check(CLI::Range(2, 2048));
   t->add_option("-o,--out", *out, "Output .qgrid")->required();
-  t->callback([shape, out, res] { WriteGrid(*out, LoadTarget(*shape, *res)); });
+  t->callback([shape, out, res] {
+    const ScalarGrid grid = LoadTarget(*shape, *res);
+    CreateParentFolder(*out);
+    WriteGrid(*out, grid);
+  });
 }
 
 }  // namespace quijibo::cli

@@ -50,13 +50,22 @@ std::vector<double> ParseBox(const std::string& text) {
   return b;
 }
 
-// Fails early (before any long computation) when a picture cannot be written.
+// Fails early (before any long computation) when the picture's name is wrong; its folder is created
+// when it is written.
 void CheckPng(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
   if (ext != ".png") throw Error(path + ": the picture must end in .png");
-  const auto dir = std::filesystem::path(path).parent_path();
-  if (!dir.empty() && !std::filesystem::is_directory(dir)) throw Error(path + ": folder " + dir.string() + " does not exist");
+}
+
+// Fails early when the folder of an output file cannot be made (a file where a folder should be),
+// without making it: a long meshing should not end in that error, nor a failed one leave folders.
+void CheckFolderCanBeMade(const std::string& path) {
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  std::filesystem::path existing = dir;
+  while (!existing.empty() && !std::filesystem::exists(existing)) existing = existing.parent_path();
+  if (!existing.empty() && !std::filesystem::is_directory(existing))
+    throw Error(path + ": cannot create folder " + dir.string() + ": " + existing.string() + " is not a folder");
 }
 
 // The Julia-set options of the mesh and picture commands: the mesh stage's settings (`keys`) and
@@ -120,7 +129,11 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
   a->j.add(c, {"resolution", "iterations", "escape", "iso", "iteration_frame", "detail", "frame", "precision", "kernel"});
   c->callback([a, mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
-    pipeline::CheckMeshFiles(a->files);
+    // The output names first; their folders are created when the mesh is ready to be written.
+    pipeline::MeshFiles names = a->files;
+    for (std::string* p : {&names.out, &names.obj, &names.vdb}) *p = std::filesystem::path(*p).filename().string();
+    pipeline::CheckMeshFiles(names);
+    for (const std::string& p : {a->files.out, a->files.obj, a->files.vdb}) CheckFolderCanBeMade(p);
     const RationalMap map = ReadMap(a->map);
     o.meshing.show_progress = true;
     if (!a->box.empty()) o.box = ParseBox(a->box);
@@ -133,6 +146,8 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
       throw Error(a->map + ": the surface log|q_n| = " + std::to_string(o.iso) +
                   " does not cross the box (no triangles); nothing written");
     if (r.empty()) std::fprintf(stderr, "quijibo: the surface does not cross the box (no triangles): no mesh written\n");
+    for (const std::string& p : {a->files.out, a->files.obj, a->files.vdb})
+      if (!p.empty() && !r.empty()) CreateParentFolder(p);
     pipeline::WriteMeshFiles(r, o, a->files);
     WriteOutput(a->summary, pipeline::MeshSummary(r, o, a->map, a->files).dump(2) + "\n");
   });
@@ -195,6 +210,7 @@ void AddPicture(CLI::App& app) {
     const pipeline::MeshStageOptions& o = s->j.o;
     const pipeline::SlicePicture pic =
         pipeline::SliceAgainstTargetPicture(map, target, s->target, view, o.julia, o.iso, o.precision);
+    CreateParentFolder(s->out);
     WritePng(s->out, pic.image);
     WriteOutput("", pipeline::SliceReport(pic, s->out, o.julia, o.iso, o.precision).dump(2) + "\n");
   });
@@ -218,6 +234,7 @@ void AddPicture(CLI::App& app) {
     const mesh::SliceView view = f->View({c[0] - h, c[1] - h, c[2] - h}, {c[0] + h, c[1] + h, c[2] + h});
     f->j.finish({(view.min_corner[0] + view.max_corner[0]) / 2, (view.min_corner[1] + view.max_corner[1]) / 2,
                  (view.min_corner[2] + view.max_corner[2]) / 2});
+    CreateParentFolder(f->out);
     WritePng(f->out, mesh::ModulusVersorSlice(map, f->j.o.julia, view, f->modulus_scale, f->j.o.iso));
   });
 
@@ -233,7 +250,9 @@ void AddPicture(CLI::App& app) {
   BindSettings(rc, r->pics, {"render_size", "render_views"});
   rc->callback([r] {
     CheckPng(r->out);
-    WritePng(r->out, mesh::RenderMesh(mesh::ReadMesh(r->mesh), r->pics.render));
+    const Image image = mesh::RenderMesh(mesh::ReadMesh(r->mesh), r->pics.render);
+    CreateParentFolder(r->out);
+    WritePng(r->out, image);
   });
 }
 

@@ -7,6 +7,19 @@
 #include "quijibo/error.h"
 #include "quijibo/progress.h"
 
+namespace {
+
+// `-q` is accepted after any subcommand too (`quijibo optimize ... -q`), bound to the same flag as
+// before it; a subcommand with its own --quiet (run) keeps it.
+void AddQuietEverywhere(CLI::App& app, bool& quiet) {
+  for (CLI::App* sub : app.get_subcommands([](CLI::App* s) { return !s->get_name().empty(); })) {
+    if (sub->get_option_no_throw("--quiet") == nullptr) sub->add_flag("-q,--quiet", quiet, "No progress on stderr");
+    AddQuietEverywhere(*sub, quiet);
+  }
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   // Under a file-size limit (ulimit -f) an over-long write then fails with EFBIG and is reported
   // like a full disk (file and reason, no partial file), instead of SIGXFSZ killing us mid-file.
@@ -31,6 +44,7 @@ int main(int argc, char** argv) {
   quijibo::cli::AddShapeCommands(app);
   quijibo::cli::AddBenchBandCommand(app);
   quijibo::cli::AddRunCommand(app);
+  AddQuietEverywhere(app, quiet);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

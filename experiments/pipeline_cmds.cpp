@@ -67,8 +67,9 @@ void AddModuleCommands(CLI::App& app) {
   auto a = std::make_shared<Args>();
   CLI::App* m = app.add_subcommand(
       "monopoles",
-      "The initial guess (2015 paper §4.4): mesh -> SDF -> BEM potential -> greedy monopole fit -> map.json, "
-      "with the roots as a coloured PLY and a PNG slice of the potential");
+      "The initial guess: mesh -> SDF -> map.json, by default a least-squares fit of the log modulus to the "
+      "signed distance (--initializer log-kernel); --initializer monopoles is the 2015 paper's §4.4 (BEM "
+      "potential, greedy monopole fit). Also writes the roots as a coloured PLY and a PNG slice");
   m->add_option("mesh", a->mesh, "Input mesh")->required();
   m->add_option("-o,--out", a->out, "Output folder")->required();
   m->add_option("--initializer", a->guess.kind,

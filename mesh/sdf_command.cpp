@@ -8,12 +8,15 @@
 #include "mesh/normalize.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
+#include "quijibo/json_reader.h"
 
 namespace quijibo::mesh {
 
 std::string SdfCommandOptions::validate() const {
   if (input.empty()) return "an input mesh is required";
   if (output.empty()) return "an output .qgrid path is required";
+  if (!HasExtension(output, ".qgrid")) return output + ": the output must end in .qgrid (the grid format written)";
+  if (!vdb_output.empty() && !HasExtension(vdb_output, ".vdb")) return vdb_output + ": --vdb must end in .vdb";
   if (resolution < 2 || resolution > 2048) return "resolution must be in [2, 2048]";
   if (!(padding >= 0.0 && padding < 0.5)) return "padding must be in [0, 0.5)";
   if (!(fractal_radius > 0.0) || !std::isfinite(fractal_radius))
@@ -45,24 +48,22 @@ void WriteFrameJson(const std::string& path, const FractalFrame& frame,
 }
 
 FractalFrame ReadFrameJson(const std::string& path) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ReadFile(path));
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path + ": not valid JSON: " + e.what());
-  }
+  const nlohmann::json j = ParseJson(ReadFile(path), path);
+  const JsonReader r(j, path);
   if (!j.is_object() || j.value("format", "") != "quijibo-frame")
     throw Error(path + ": \"format\" should be \"quijibo-frame\"");
+  r.allow_keys("", {"format", "version", "fractal_radius", "padding", "scale", "translation", "origin", "source_mesh",
+                    "resolution"});
+  auto vec3 = [&](const std::string& p) {
+    if (r.array_size(p) != 3) r.fail(p, "expected 3 numbers");
+    return Vec3{r.number(p + "/0"), r.number(p + "/1"), r.number(p + "/2")};
+  };
   FractalFrame frame;
-  try {
-    frame.fractal_radius = j.at("fractal_radius").get<double>();
-    frame.padding = j.at("padding").get<double>();
-    frame.scale = j.at("scale").get<double>();
-    frame.translation = j.at("translation").get<Vec3>();
-    if (j.contains("origin")) frame.origin = j.at("origin").get<Vec3>();
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path + ": " + e.what());
-  }
+  frame.fractal_radius = r.number("/fractal_radius");
+  frame.padding = r.number("/padding");
+  frame.scale = r.number("/scale");
+  frame.translation = vec3("/translation");
+  if (r.has("/origin")) frame.origin = vec3("/origin");
   if (const std::string why = frame.validate(); !why.empty()) throw Error(path + ": " + why);
   return frame;
 }
@@ -102,6 +103,8 @@ void RunSdfCommand(const SdfCommandOptions& options) {
   // Write the auxiliary files first and the .qgrid last; undo on failure so a failed run
   // leaves no partial set of outputs.
   std::vector<std::string> written;
+  CreateParentFolder(options.output);
+  if (!options.vdb_output.empty()) CreateParentFolder(options.vdb_output);
   try {
     const std::string frame_path = FrameJsonPathFor(options.output);
     WriteFrameJson(frame_path, frame, options.input, options.resolution);

@@ -62,16 +62,8 @@ std::string OptimizeSummary::Report() const {
                   p.stalled ? "  STALLED" : "");
     s << line;
   }
-  for (const PassSummary& p : passes)
-    if (p.band.is_object()) {
-      std::snprintf(line, sizeof line,
-                    "band: level %d pass %c: %.1f %% of the dense work (%.2f %% of %lld cells per band "
-                    "evaluation, %lld anchors), energy error vs dense %.1e\n",
-                    p.level, p.kind, 100.0 * p.band.value("work_fraction", 0.0),
-                    100.0 * p.band.value("mean_fraction", 0.0), p.band.value("cells", 0LL),
-                    p.band.value("anchors", 0LL), p.band.value("energy_error", 0.0));
-      s << line;
-    }
+  // Each pass's narrow-band work goes to summary.json ("band") and the log's pass_end lines, not
+  // here: the table is read on every run, the band statistics rarely.
   for (const Level& l : levels)
     if (l.resolution != l.scheduled) {
       std::snprintf(line, sizeof line,

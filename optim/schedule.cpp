@@ -89,7 +89,15 @@ Schedule Schedule::FromJson(const JsonReader& r, const std::string& ptr) {
     }
     if (r.has(p + "/tolerance")) spec.tolerance = r.number_at_least(p + "/tolerance", 0.0);
   };
-  if (node.is_string()) return Parse(node.get<std::string>(), defaults);
+  // Notation inside a JSON document: its errors name the document and the key too.
+  auto parse = [&](const std::string& p, const std::string& text) {
+    try {
+      return Parse(text, defaults);
+    } catch (const Error& e) {
+      r.fail(p, e.what());
+    }
+  };
+  if (node.is_string()) return parse(ptr, node.get<std::string>());
   r.allow_keys(ptr, {"levels", "defaults", "notation"});
   if (r.has(ptr + "/defaults")) {
     r.allow_keys(ptr + "/defaults", {"V", "F", "R"});
@@ -98,7 +106,7 @@ Schedule Schedule::FromJson(const JsonReader& r, const std::string& ptr) {
       if (r.has(ptr + "/defaults/" + names[k])) read_pass(ptr + "/defaults/" + names[k], defaults[k]);
   }
   // Notation alone; or levels, with the notation beside them (ToJson's form) only if it agrees.
-  if (r.has(ptr + "/notation") && !r.has(ptr + "/levels")) return Parse(r.string(ptr + "/notation"), defaults);
+  if (r.has(ptr + "/notation") && !r.has(ptr + "/levels")) return parse(ptr + "/notation", r.string(ptr + "/notation"));
   Schedule s;
   const std::size_t nl = r.array_size(ptr + "/levels");
   if (nl == 0) r.fail(ptr + "/levels", "expected at least one level");
@@ -111,7 +119,7 @@ Schedule Schedule::FromJson(const JsonReader& r, const std::string& ptr) {
     level.resolution = int(n);
     const nlohmann::json& passes = r.at(lp + "/passes");
     if (passes.is_string()) {
-      const Schedule one = Parse(std::to_string(n) + "(" + passes.get<std::string>() + ")", defaults);
+      const Schedule one = parse(lp + "/passes", std::to_string(n) + "(" + passes.get<std::string>() + ")");
       level.passes = one.levels[0].passes;
     } else {
       const std::size_t np = r.array_size(lp + "/passes");

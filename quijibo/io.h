@@ -10,6 +10,10 @@ namespace quijibo {
 // system's reason) on failure, removing the temporary file.
 void WriteFileAtomically(const std::string& path, const std::string& bytes);
 
+// Creates the folder an output file goes in (and its parents) if missing: every command that writes
+// a file does so once its inputs are validated. Throws quijibo::Error naming the path on failure.
+void CreateParentFolder(const std::string& path);
+
 // Whether `path` ends with `ext` (".ply"), ignoring case: file formats are chosen by extension.
 bool HasExtension(const std::string& path, const std::string& ext);
 

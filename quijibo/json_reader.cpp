@@ -1,6 +1,7 @@
 #include "quijibo/json_reader.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "quijibo/error.h"
@@ -28,18 +29,45 @@ std::string JsonReader::describe(const json& v) {
   return std::string(v.type_name()) + " " + s;
 }
 
+namespace {
+
+// Letters and digits only, lower case: "maxIterations" and "max-iterations" read as "maxiterations".
+std::string Folded(const std::string& s) {
+  std::string f;
+  for (unsigned char c : s)
+    if (std::isalnum(c)) f += char(std::tolower(c));
+  return f;
+}
+
+}  // namespace
+
+std::string SuggestKey(const std::string& key, const std::vector<std::string>& allowed) {
+  // A typo (a small edit distance) or the same key spelt another way.
+  std::string best;
+  int best_d = 3;
+  for (const auto& a : allowed) {
+    const int d = Folded(key) == Folded(a) ? 0 : EditDistance(key, a);
+    if (d < best_d) best_d = d, best = a;
+  }
+  if (!best.empty()) return best;
+  // An abbreviation or a clipped word ("max_iters" for "max_iterations"): the key is all but its
+  // last letters a prefix of a longer known key.
+  std::size_t best_prefix = 0;
+  for (const auto& a : allowed) {
+    std::size_t n = 0;
+    while (n < key.size() && n < a.size() && key[n] == a[n]) ++n;
+    if (n >= 4 && n + 2 >= key.size() && a.size() > key.size() && n > best_prefix) best_prefix = n, best = a;
+  }
+  return best;
+}
+
 void JsonReader::allow_keys(const std::string& pointer,
                             const std::vector<std::string>& allowed) const {
   const json& obj = pointer.empty() ? doc_ : at(pointer);
   if (!obj.is_object()) fail(pointer, "expected an object, found " + describe(obj));
   for (const auto& [key, value] : obj.items()) {
     if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
-    std::string best;
-    int best_d = 3;
-    for (const auto& a : allowed) {
-      const int d = EditDistance(key, a);
-      if (d < best_d) best_d = d, best = a;
-    }
+    const std::string best = SuggestKey(key, allowed);
     fail(pointer + "/" + key,
          "unknown key" + (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)"));
   }

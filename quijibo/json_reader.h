@@ -47,6 +47,10 @@ class JsonReader {
 // line number of the text's first line (for one line of a JSON-lines file).
 nlohmann::json ParseJson(const std::string& text, const std::string& source, std::size_t first_line = 1);
 
+// The known key an unknown one was probably meant as (a typo, another spelling, an abbreviation),
+// or "" when none is close: the "did you mean" of unknown-key errors.
+std::string SuggestKey(const std::string& key, const std::vector<std::string>& allowed);
+
 // Edit distance, for "did you mean" suggestions.
 int EditDistance(const std::string& a, const std::string& b);
 

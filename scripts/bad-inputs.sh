@@ -48,6 +48,7 @@ row "number too large for a double (found by fuzzing)" big.json '{"target": {"an
 row "not an object" array.json '[1, 2]' "$Q" run array.json --out out
 row "misspelled key" typo.json "{$TORUS, \"optimiser\": {}}" "$Q" run typo.json --out out
 row "misspelled nested key" typo2.json "{$TORUS, \"mesh\": {\"resolutoin\": 64}}" "$Q" run typo2.json --out out
+row "clipped key" typo3.json "{$TORUS, \"optimizer\": {\"max_iters\": {\"F\": 5}}}" "$Q" run typo3.json --out out
 row "wrong type" type.json '{"target": {"analytic": "torus", "resolution": "big"}}' "$Q" run type.json --out out
 row "negative resolution" neg.json '{"target": {"analytic": "torus", "resolution": -5}}' "$Q" run neg.json --out out
 row "zero resolution" zero.json '{"target": {"analytic": "torus", "resolution": 0}}' "$Q" run zero.json --out out
@@ -98,6 +99,7 @@ row "sdf: mesh with a large hole" open-box.obj "" "$Q" sdf open-box.obj -o x.qgr
 printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_headcomment\n0 0 0\n' > noend.ply
 row "sdf: PLY header without end_header (hung assimp; found by fuzzing)" noend.ply "" "$Q" sdf noend.ply -o x.qgrid -r 16
 row "sdf: zero resolution" garbage.obj "" "$Q" sdf "$ROOT/data/bunny.obj" -o x.qgrid -r 0
+row "sdf: output not .qgrid" garbage.obj "" "$Q" sdf "$ROOT/data/bunny.obj" -o x.stl
 row "optimize: missing map" none.json "" "$Q" optimize -t torus -m none.json -o opt
 row "optimize: empty schedule" none.json "" "$Q" optimize -t torus -m none.json -s "" -o opt
 row "optimize: caps with a JSON schedule" caps.json '{"levels": [{"resolution": 8, "passes": "VF"}]}' "$Q" optimize -t torus -m none.json -s caps.json --max-f 50 -o opt
@@ -106,3 +108,6 @@ QUIJIBO_TEST_EXIT_AFTER_STEP=4 "$Q" --quiet optimize -t torus --target-resolutio
 row "optimize: --resume with another cap" none.json "" "$Q" optimize -t torus --target-resolution 16 -s '8(VF)' --max-f 50 --checkpoint-every 2 -o killed --resume
 row "mesh: incomplete map" bad-map.json '{"format": "quijibo-map", "version": 1}' "$Q" mesh bad-map.json -o x.ply
 row "mesh: wrong extension" bad-map.json "" "$Q" mesh bad-map.json -o x.stl
+row "optimize: clipped key in a schedule file" clipped.json '{"levels": [{"resolution": 8, "passes": [{"kind": "F", "max_iters": 5}]}]}' "$Q" optimize -t torus -m start.json -s clipped.json -o opt
+row "optimize: bad notation in a schedule file" notation.json '{"levels": [{"resolution": 8, "passes": "VX"}]}' "$Q" optimize -t torus -m start.json -s notation.json -o opt
+row "plot: not a log (a summary.json)" summary.json '{"frame": "user", "triangles": 0}' "$Q" plot summary.json -o conv

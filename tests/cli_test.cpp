@@ -99,11 +99,34 @@ TEST_F(CliTest, BadInputGetsOneClearLineAndNonZeroExit) {
 }
 
 TEST_F(CliTest, FailedWritesLeaveNoFileBehind) {
-  const std::string out = Path("sub/dir/map.json");  // folder does not exist
+  Write("file", "not a folder");
+  const std::string out = Path("file/dir/map.json");  // its folder cannot be created
   const CommandResult r = RunQuijibo("map random --top 2 --bottom 2 -o " + out);
   EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.out.find("cannot write"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("cannot create folder"), std::string::npos) << r.out;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
   EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// Output folders are created (after the inputs were read), by every command alike.
+TEST_F(CliTest, OutputFoldersAreCreated) {
+  ASSERT_EQ(RunQuijibo("map random --top 2 --bottom 2 -o " + Path("new/maps/map.json")).code, 0);
+  EXPECT_TRUE(std::filesystem::exists(Path("new/maps/map.json")));
+  ASSERT_EQ(RunQuijibo("target sphere -r 8 -o " + Path("new/grids/sphere.qgrid")).code, 0);
+  EXPECT_TRUE(std::filesystem::exists(Path("new/grids/sphere.qgrid")));
+  // Bad input first: no folder.
+  EXPECT_NE(RunQuijibo("energy -t cube -m " + Path("new/maps/map.json") + " -o " + Path("never/e.json")).code, 0);
+  EXPECT_FALSE(std::filesystem::exists(Path("never")));
+}
+
+// -q/--quiet is accepted after any subcommand as well as before it.
+TEST_F(CliTest, QuietAfterTheSubcommand) {
+  const std::string map = Path("map.json");
+  const CommandResult a = RunQuijibo("map random --top 2 --bottom 2 -o " + map + " -q");
+  EXPECT_EQ(a.code, 0) << a.out;
+  const CommandResult b = RunQuijibo("energy -t sphere --target-resolution 8 -m " + map + " --quiet");
+  EXPECT_EQ(b.code, 0) << b.out;
+  EXPECT_NE(RunQuijibo("optimize --help").out.find("--quiet"), std::string::npos);
 }
 
 TEST_F(CliTest, RandomMapsAreDeterministic) {

@@ -36,16 +36,19 @@ class JuliaCli : public ::testing::Test {
 };
 
 TEST_F(JuliaCli, MeshWritesPlyObjVdbAndASummary) {
-  const CommandResult r = RunQuijibo("mesh " + Path("map.json") + " -o " + Path("m.ply") + " --obj " + Path("m.obj") +
-                        " --vdb " + Path("m.vdb") + " -r 24 -n 2 --frame fractal");
+  // Output folders that do not exist yet are created.
+  const CommandResult r = RunQuijibo("mesh " + Path("map.json") + " -o " + Path("new/m.ply") + " --obj " + Path("m.obj") +
+                        " --vdb " + Path("vdb/m.vdb") + " -r 24 -n 2 --frame fractal");
   ASSERT_EQ(r.code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_GT(j["triangles"].get<int>(), 10);
   EXPECT_EQ(j["evaluations"]["non_finite"].get<int>(), 0);
-  EXPECT_TRUE(Exists("m.ply") && Exists("m.obj") && Exists("m.vdb"));
-  const CommandResult p = RunQuijibo("picture render " + Path("m.ply") + " -o " + Path("r.png") + " --size 64 --views 2");
+  EXPECT_EQ(j["box_frame"], "fractal");
+  EXPECT_TRUE(Exists("new/m.ply") && Exists("m.obj") && Exists("vdb/m.vdb"));
+  const CommandResult p =
+      RunQuijibo("picture render " + Path("new/m.ply") + " -o " + Path("pics/r.png") + " --size 64 --views 2");
   EXPECT_EQ(p.code, 0) << p.out;
-  EXPECT_TRUE(Exists("r.png"));
+  EXPECT_TRUE(Exists("pics/r.png"));
   const CommandResult f = RunQuijibo("picture field " + Path("map.json") + " -o " + Path("f.png") + " --size 32 --axis y");
   EXPECT_EQ(f.code, 0) << f.out;
   ASSERT_EQ(RunQuijibo("target sphere -r 16 -o " + Path("t.qgrid")).code, 0);
@@ -95,7 +98,8 @@ TEST_F(JuliaCli, BadInputFailsWithOneLineAndNoOutput) {
       {"mesh " + Path("map.json") + " -o " + Path("a.ply") + " --escape 0.5", "escape"},
       {"mesh " + Path("map.json") + " -o " + Path("a.ply") + " --tile 31", "tile"},
       {"mesh " + Path("map.json") + " -o " + Path("a.ply") + " --precision octuple", "octuple"},
-      {"mesh " + Path("map.json") + " -o " + Path("nofolder/a.ply"), "does not exist"},
+      {"mesh " + Path("map.json") + " -o " + Path("map.json/a.ply"), "cannot create folder"},
+      {"mesh " + Path("map.json") + " -o " + Path("new/a.stl"), "must end in"},
       {"picture render " + Path("map.json") + " -o " + Path("a.png"), "map.json"},
   };
   for (const Case& c : cases) {
@@ -104,7 +108,7 @@ TEST_F(JuliaCli, BadInputFailsWithOneLineAndNoOutput) {
     EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.args << " -> " << r.out;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
   }
-  EXPECT_FALSE(Exists("a.ply") || Exists("a.stl") || Exists("a.png"));
+  EXPECT_FALSE(Exists("a.ply") || Exists("a.stl") || Exists("a.png") || Exists("new"));
 }
 
 // --kernel: the vector and the scalar kernels write the same PLY; `bench mesh` runs both and

@@ -85,7 +85,8 @@ class PlotTest : public ::testing::Test {
   std::vector<std::string> Outputs() const {
     std::vector<std::string> found;
     for (const auto& e : std::filesystem::recursive_directory_iterator(dir_))
-      if (e.is_regular_file() && e.path().extension() != ".jsonl") found.push_back(e.path().string());
+      if (e.is_regular_file() && e.path().extension() != ".jsonl" && e.path().extension() != ".json")
+        found.push_back(e.path().string());
     return found;
   }
   std::filesystem::path dir_;
@@ -147,9 +148,14 @@ TEST_F(PlotTest, BadInputGetsOneLineAndNoOutputFiles) {
   // No energies at all.
   Write("empty.jsonl", R"({"type":"run","backend":"cached"})" "\n");
   expect_error("plot " + Path("empty.jsonl") + " -o " + prefix, "no energies");
-  // An output folder that does not exist.
+  // A pretty-printed JSON file (summary.json) is not a log, and is called so.
+  Write("summary.json", "{\n  \"frame\": \"user\"\n}\n");
+  expect_error("plot " + Path("summary.json") + " -o " + prefix, "summary.json: not a log.jsonl (expected an optimizer log");
+  Write("one_line.json", R"({"format":"quijibo-map"})" "\n");
+  expect_error("plot " + Path("one_line.json") + " -o " + prefix, "one_line.json: not a log.jsonl");
+  // An output folder that cannot be created; one that does not exist yet is created.
   Write("ok.jsonl", SyntheticLog("x", 0.02));
-  expect_error("plot " + Path("ok.jsonl") + " -o " + Path("no/such/folder/out"), "does not exist");
+  expect_error("plot " + Path("ok.jsonl") + " -o " + Path("ok.jsonl/out"), "cannot create folder");
   // More labels than logs.
   expect_error("plot " + Path("ok.jsonl") + " -o " + prefix + " --label a --label b", "--label");
 }

@@ -156,6 +156,8 @@ TEST(RunTest, BadExperimentsGiveOneClearLineAndNoResultsFolder) {
       {"not-object", "[1, 2]", "expected a JSON object"},
       {"unknown-key", "{" + torus + R"(, "optimiser": {}})", "/optimiser: unknown key (did you mean \"optimizer\"?)"},
       {"unknown-nested", "{" + torus + R"(, "mesh": {"resolutoin": 64}})", "/mesh/resolutoin"},
+      {"clipped-key", "{" + torus + R"(, "optimizer": {"max_iters": {"F": 5}}})",
+       "/optimizer/max_iters: unknown key (did you mean \"max_iterations\"?)"},
       {"wrong-type", R"({"target": {"analytic": "torus", "resolution": "big"}})", "/target/resolution: expected an integer"},
       {"negative-res", R"({"target": {"analytic": "torus", "resolution": -5}})", "/target/resolution"},
       {"zero-res", R"({"target": {"analytic": "torus", "resolution": 0}})", "/target/resolution"},

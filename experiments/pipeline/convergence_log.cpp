@@ -41,6 +41,9 @@ std::optional<double> Energy(const JsonReader& r, const std::string& pointer) {
   return r.number(pointer);
 }
 
+constexpr const char* kExpected =
+    "expected an optimizer log: one JSON object with a \"type\" per line, as quijibo optimize and run write";
+
 }  // namespace
 
 bool HasEnergies(const ConvergenceLog& log) {
@@ -63,6 +66,7 @@ ConvergenceLog ReadConvergenceLog(const std::string& path) {
   std::size_t last = lines.size();
   while (last > 0 && IsBlank(lines[last - 1])) --last;  // the last non-blank line is lines[last - 1]
 
+  bool any_line = false;
   std::string current_pass;  // PassKey of the current segment
   bool open_segment = false;
   std::vector<ConvergenceLog::Point> pass_end_absolute;
@@ -70,16 +74,23 @@ ConvergenceLog ReadConvergenceLog(const std::string& path) {
     const std::string& line = lines[n - 1];
     if (IsBlank(line)) continue;
     const std::string where = path + ":" + std::to_string(n);
+    // A file whose first line is not a log line (a pretty-printed summary.json, a map) is named as
+    // what it is not; "invalid JSON" would send the user looking for a syntax error.
+    const bool first = !any_line;
+    any_line = true;
     json j;
     try {
       j = ParseJson(line, path, n);
     } catch (const Error&) {
+      if (first && n != last) throw Error(path + ": not a log.jsonl (" + kExpected + ")");
       if (n != last) throw;
       std::fprintf(stderr, "quijibo: warning: %s: skipped the unparsable last line (a killed run?)\n", where.c_str());
       log.truncated = true;
       break;
     }
     const JsonReader r(j, where);
+    if (first && !(j.is_object() && j.contains("type")))
+      throw Error(path + ": not a log.jsonl (" + kExpected + ")");
     if (!j.is_object()) r.fail("", "expected a JSON object, found " + JsonReader::describe(j));
     const std::string type = r.string("/type");
     if (type == "run") {

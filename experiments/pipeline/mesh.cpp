@@ -226,6 +226,8 @@ json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std:
                     {"origin", r.frame.origin}}},
                   {"kernel", o.precision == "double" ? o.kernel : std::string("scalar")},
                   {"box", {{"min", r.meshing.min_corner}, {"max", r.meshing.max_corner}}},
+                  // "frame" is the output's; the box is where the map was sampled, in its iteration frame.
+                  {"box_frame", o.iteration_frame == "reference" ? "reference" : "fractal"},
                   {"resolution", r.meshing.resolution},
                   {"cells", s.cells},
                   {"spacing", s.spacing},

@@ -152,6 +152,25 @@ std::string Describe(const json& run) {
 const char* const kColors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
                                "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
 
+// Rows of the key under the plot. It reads "relative | absolute | pass start", a column each and a
+// row per log, when that fits the image's width; gnuplot gives every column the width of the
+// longest title and sizes text by its own estimate (9 px a character at 11 pt with pngcairo, more
+// than is drawn), so wider keys would be cut at the image's edges, the relative curves' samples
+// first. Those get fewer columns and more rows.
+std::size_t KeyRows(const std::vector<std::string>& titles, std::size_t relative, std::size_t absolute, int width) {
+  std::size_t longest = 0;
+  for (const auto& t : titles)  // characters, not bytes: UTF-8 continuation bytes do not count
+    longest = std::max<std::size_t>(
+        longest, std::count_if(t.begin(), t.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xc0) != 0x80; }));
+  constexpr double kCharPixels = 9.0;
+  const double column = (double(longest) + 8.0) * kCharPixels;  // the sample, gaps and the title
+  const std::size_t fit = std::max<std::size_t>(1, std::size_t(0.96 * width / column));
+  const std::size_t rows = std::max<std::size_t>({relative, absolute, 1});
+  const std::size_t columns = (titles.size() + rows - 1) / rows;
+  if (columns <= fit) return rows;
+  return (titles.size() + fit - 1) / fit;
+}
+
 }  // namespace
 
 void Plot(const PlotOptions& o) {
@@ -160,17 +179,14 @@ void Plot(const PlotOptions& o) {
   if (o.labels.size() > logs.size())
     throw Error("--label: " + std::to_string(o.labels.size()) + " labels for " + std::to_string(logs.size()) + " logs");
 
-  // The output folder must exist; gnuplot's own message would be vaguer.
   const fs::path prefix(o.out);
-  const fs::path folder = prefix.parent_path().empty() ? fs::path(".") : prefix.parent_path();
   if (prefix.filename().empty()) throw Error(o.out + ": expected an output prefix such as out/convergence");
-  if (!fs::is_directory(folder)) throw Error(o.out + ": folder " + folder.string() + " does not exist");
   const std::string png = o.out + ".png", svg = o.out + ".svg";
 
   TempDir tmp;
   // The plot command's clauses: relative curves, then absolute ones, then the pass-start key entry, so
   // that the key (filled column by column, one row per log) reads "relative | absolute | pass start".
-  std::vector<std::string> relative_clauses, absolute_clauses, extra_clauses;
+  std::vector<std::string> relative_clauses, absolute_clauses, extra_clauses, titles;
   std::ostringstream marks;
   long long min_step = 0, max_step = 0;
   bool any_step = false;
@@ -213,14 +229,16 @@ void Plot(const PlotOptions& o) {
     if (has_rel) {
       const std::string file = tmp / ("relative" + std::to_string(i) + ".dat");
       WriteFileAtomically(file, rel.str());
+      titles.push_back(label + " relative");
       relative_clauses.push_back(Quote(file) + " using 1:2 with lines lw 2 lc rgb '" + color + "' title " +
-                                 Quote(label + " relative"));
+                                 Quote(titles.back()));
     }
     if (has_abs) {
       const std::string file = tmp / ("absolute" + std::to_string(i) + ".dat");
       WriteFileAtomically(file, abs.str());
+      titles.push_back(label + " absolute");
       absolute_clauses.push_back(Quote(file) + " using 1:2 with linespoints dt 2 lw 1.5 pt 7 ps 0.8 lc rgb '" +
-                                 abs_color + "' title " + Quote(label + " absolute"));
+                                 abs_color + "' title " + Quote(titles.back()));
     }
   }
 
@@ -243,8 +261,8 @@ void Plot(const PlotOptions& o) {
         marks << "set label " << Quote(m.label) << " at first " << m.step << ", graph " << 0.975 - 0.04 * row
               << " left offset character 0.4, 0 font ',9' tc rgb '#404040' front\n";
     }
-    extra_clauses.push_back("NaN with lines dt 2 lw 1 lc rgb '#808080' title " +
-                            Quote(logs.size() == 1 ? "pass start" : "pass start (" + first_label + ")"));
+    titles.push_back(logs.size() == 1 ? "pass start" : "pass start (" + first_label + ")");
+    extra_clauses.push_back("NaN with lines dt 2 lw 1 lc rgb '#808080' title " + Quote(titles.back()));
   }
 
   // Passes that made no iteration leave only the absolute energies at the start and the pass ends.
@@ -262,11 +280,13 @@ void Plot(const PlotOptions& o) {
     }
   }
 
-  const std::size_t rows = std::max<std::size_t>({relative_clauses.size(), absolute_clauses.size(), 1});
+  const std::size_t rows = KeyRows(titles, relative_clauses.size(), absolute_clauses.size(), o.width);
   std::string clauses;
   for (const auto* list : {&relative_clauses, &absolute_clauses, &extra_clauses})
     for (const auto& c : *list) clauses += (clauses.empty() ? "" : ", \\\n     ") + c;
 
+  // Every log read and checked: the output folder may now be created.
+  CreateParentFolder(png);
   Scratch scratch;
   const std::string suffix = ".tmp." + std::to_string(::getpid());
   const std::string png_tmp = scratch.add(png + suffix), svg_tmp = scratch.add(svg + suffix);
@@ -295,10 +315,11 @@ void Plot(const PlotOptions& o) {
      << "set xrange [" << (min_step < max_step ? min_step : min_step - 1) << ":"
      << (min_step < max_step ? max_step : max_step + 1)
      << "]\n"
-     // The key under the x label, one row per log; gnuplot's own "below" would overlap the label.
-     << "set bmargin " << 4.5 + 1.25 * double(rows) << "\n"
+     // The key under the x label (gnuplot's own "below" would overlap the label), its box clear of
+     // the image's bottom edge.
+     << "set bmargin " << 5.5 + 1.3 * double(rows) << "\n"
      << "set key vertical maxrows " << rows
-     << " Left reverse center bottom at screen 0.5, screen 0.01 box opaque spacing 1.2 width 1\n"
+     << " Left reverse center bottom at screen 0.5, screen 0.02 box opaque spacing 1.2 width 1\n"
      << marks.str() << "plot " << clauses << "\n"
      << "set terminal svg size " << size << " noenhanced font 'sans,11' background '#ffffff'\n"
      << "set output " << Quote(svg_tmp) << "\n"

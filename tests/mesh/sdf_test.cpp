@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <random>
 
 #include "mesh/normalize.h"
@@ -13,6 +14,7 @@
 #include "mesh_fixtures.h"
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
+#include "quijibo/io.h"
 
 namespace quijibo::mesh {
 namespace {
@@ -222,6 +224,17 @@ TEST(SdfCommand, WritesFieldFrameAndVdb) {
   EXPECT_EQ(dir.count(), 3u);
   const FractalFrame frame = ReadFrameJson(dir.file("bunny.frame.json"));
   EXPECT_EQ(FrameJsonPathFor(o.output), dir.file("bunny.frame.json"));
+  // The frame file is read strictly, with suggestions for misspelt keys.
+  nlohmann::json edited = nlohmann::json::parse(ReadFile(dir.file("bunny.frame.json")));
+  edited["fractal_raduis"] = edited["fractal_radius"];
+  edited.erase("fractal_radius");
+  const std::string bad = dir.write("bad.frame.json", edited.dump());
+  try {
+    ReadFrameJson(bad);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), bad + ": /fractal_raduis: unknown key (did you mean \"fractal_radius\"?)");
+  }
   const FractalFrame expected = NormalizationFor(ReadMesh(o.input));
   EXPECT_EQ(frame.scale, expected.scale);
   EXPECT_EQ(frame.translation, expected.translation);
@@ -241,15 +254,31 @@ TEST(SdfCommand, FailureLeavesNoOutput) {
   o.vdb_output = dir.file("out.vdb");
   o.resolution = 20;
   o.quiet = true;
-  // Unreadable input, a mesh that bounds nothing, and an output folder that does not exist.
+  // Unreadable input, a mesh that bounds nothing, and an output folder that cannot be created.
   o.input = dir.write("in.xyz", "v 0 0 0\n");
   EXPECT_THROW(RunSdfCommand(o), Error);
   o.input = dir.write("open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0.2\nf 1 2 3\nf 2 4 3\n");
   EXPECT_THROW(RunSdfCommand(o), Error);
   EXPECT_EQ(dir.count(), 2u);  // just the two inputs
   o.input = QUIJIBO_SOURCE_DIR "/data/bunny.obj";
-  o.vdb_output = dir.file("missing-folder/out.vdb");
+  o.vdb_output = dir.file("in.xyz/out.vdb");
   EXPECT_THROW(RunSdfCommand(o), Error);
+  EXPECT_EQ(dir.count(), 2u);
+  // Output names the formats written do not match.
+  auto message = [&] {
+    try {
+      RunSdfCommand(o);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  o.vdb_output.clear();
+  o.output = dir.file("new/a.stl");
+  EXPECT_EQ(message(), "sdf: " + o.output + ": the output must end in .qgrid (the grid format written)");
+  o.output = dir.file("new/a.qgrid");
+  o.vdb_output = dir.file("new/a.ply");
+  EXPECT_EQ(message(), "sdf: " + o.vdb_output + ": --vdb must end in .vdb");
   EXPECT_EQ(dir.count(), 2u);
   o.resolution = 1;
   o.vdb_output.clear();

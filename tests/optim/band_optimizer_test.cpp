@@ -71,9 +71,17 @@ TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
   }
   EXPECT_EQ(result[0].variables(), result[1].variables());
   EXPECT_EQ(result[2].variables(), result[1].variables());
-  // The summary and the pass-end log lines carry the band's statistics.
+  // The summary and the pass-end log lines carry the band's statistics; the table on stderr does not.
   const auto summary = nlohmann::json::parse(std::ifstream(dirs[0] + "/summary.json"));
   EXPECT_TRUE(summary["passes"][0]["band"].contains("energy_error"));
+  std::ifstream log(dirs[0] + "/log.jsonl");
+  bool pass_end_band = false;
+  for (std::string line; std::getline(log, line);) {
+    const auto j = nlohmann::json::parse(line);
+    if (j["type"] == "pass_end") pass_end_band |= j.contains("band");
+  }
+  EXPECT_TRUE(pass_end_band);
+  EXPECT_EQ(s[0].Report().find("band:"), std::string::npos) << s[0].Report();
   for (const std::string& d : dirs) std::filesystem::remove_all(d);
 }
 

@@ -85,7 +85,35 @@ TEST(OptimizeOptionsTest, ASchedulesFileResolvesAgainstTheBase) {
   EXPECT_EQ(Read(json{{"schedule", "schedules/s.json"}}, dir).schedule.notation(), "12(VF)");
   EXPECT_NE(ErrorOf(json{{"schedule", "schedules/none.json"}}).find("/schedule: no such schedule file"),
             std::string::npos);
+  // Every error inside a schedule file names the file and the pointer, notation errors included.
+  auto error_in_file = [&](const std::string& text) {
+    std::ofstream(dir / "schedules" / "bad.json") << text;
+    try {
+      Read(json{{"schedule", "schedules/bad.json"}}, dir);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string file = (dir / "schedules" / "bad.json").string();
+  EXPECT_EQ(error_in_file(R"({"levels": [{"resolution": 12, "passes": "VX"}]})")
+                .rfind(file + ": /levels/0/passes: schedule \"12(VX)\": at character 5: unknown pass 'X'", 0),
+            0u);
+  EXPECT_EQ(error_in_file(R"({"notation": "12(VF"})").rfind(file + ": /notation: schedule", 0), 0u);
+  EXPECT_EQ(error_in_file("\"12(VX)\"").rfind(file + ": /: schedule \"12(VX)\"", 0), 0u);
+  EXPECT_EQ(error_in_file(R"({"levels": [{"resolution": 12, "passes": [{"kind": "V", "max_iters": 5}]}]})"),
+            file + ": /levels/0/passes/0/max_iters: unknown key (did you mean \"max_iterations\"?)");
+  EXPECT_EQ(error_in_file("{\n \"levels\": [\n oops").rfind(file + ":3:2: invalid JSON: syntax error", 0), 0u);
   std::filesystem::remove_all(dir);
+}
+
+// Unknown keys get the known key they were probably meant as: a typo, another spelling, a clipped word.
+TEST(OptimizeOptionsTest, UnknownKeysGetSuggestions) {
+  EXPECT_EQ(ErrorOf({{"max_iters", 5}}), "exp.json: /max_iters: unknown key (did you mean \"max_iterations\"?)");
+  EXPECT_EQ(ErrorOf({{"maxIterations", 5}}), "exp.json: /maxIterations: unknown key (did you mean \"max_iterations\"?)");
+  EXPECT_EQ(ErrorOf({{"checkpoint", 5}}), "exp.json: /checkpoint: unknown key (did you mean \"checkpoint_every\"?)");
+  EXPECT_EQ(SuggestKey("colour", {"alpha", "memory"}), "");
+  EXPECT_EQ(SuggestKey("mem", {"alpha", "memory"}), "");
 }
 
 TEST(OptimizeOptionsTest, BadValuesNameThePointerAndTheRange) {
