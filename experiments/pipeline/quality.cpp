@@ -11,15 +11,11 @@ namespace quijibo::pipeline {
 
 using nlohmann::json;
 
-namespace {
-
-std::string Decimals(double x, int digits) {
+std::string Fixed(double x, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", digits, x);
   return buf;
 }
-
-}  // namespace
 
 json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const ScalarGrid& target,
                     const JuliaOptions& julia, double iso, double alpha, const json& start,
@@ -66,36 +62,36 @@ json RunQuality(const Experiment& e, const std::string& results, const QualityTh
     figures["one_step"] = {{"iou", f["one_step"]["iou"]}, {"leak", f["one_step"]["leak"]}};
     const double iou1 = f["one_step"].value("iou", 0.0), leak1 = f["one_step"].value("leak", 0.0);
     if (iou1 < t.min_iou)
-      warn("the optimized map's one-step set does not follow the shape: one-step IoU " + Decimals(iou1, 3) +
-           " (below " + Decimals(t.min_iou, 2) + ")");
+      warn("the optimized map's one-step set does not follow the shape: one-step IoU " + Fixed(iou1, 3) +
+           " (below " + Fixed(t.min_iou, 2) + ")");
     if (leak1 > t.max_leak)
-      warn("the one-step set leaks: its part outside the shape box is " + Decimals(leak1, 3) +
-           " of the shape's volume (above " + Decimals(t.max_leak, 2) + ")");
+      warn("the one-step set leaks: its part outside the shape box is " + Fixed(leak1, 3) +
+           " of the shape's volume (above " + Fixed(t.max_leak, 2) + ")");
     if (f.contains("n_step")) {
       const double iou = f["n_step"].value("iou", 0.0), leak = f["n_step"].value("leak", 0.0);
       const double fill = double(f["n_step"].value("set_nodes", 0LL)) / lattice_nodes;
       figures["n_step"] = {{"n", n}, {"iou", iou}, {"leak", leak}, {"fill", fill}};
       const std::string set = "the n = " + std::to_string(n) + " set";
       if (fill > t.max_fill)
-        warn(set + " fills the box: " + Decimals(fill, 3) + " of the lattice is in it (above " + Decimals(t.max_fill, 2) +
+        warn(set + " fills the box: " + Fixed(fill, 3) + " of the lattice is in it (above " + Fixed(t.max_fill, 2) +
              "; the shape box is 0.36 of it); the mesh is not the shape");
       // At n = 1 the n-step set is the one-step set: its IoU and leak are warned about above.
       if (leak > t.max_leak && n > 1)
-        warn(set + " leaks: its part outside the shape box is " + Decimals(leak, 3) + " of the shape's volume (above " +
-             Decimals(t.max_leak, 2) + ")");
+        warn(set + " leaks: its part outside the shape box is " + Fixed(leak, 3) + " of the shape's volume (above " +
+             Fixed(t.max_leak, 2) + ")");
       if (iou < t.min_iou && n > 1)
-        warn(set + " does not follow the shape: n-step IoU " + Decimals(iou, 3) + " (below " + Decimals(t.min_iou, 2) +
-             ", one-step " + Decimals(iou1, 3) + "); try fewer iterations (mesh.iterations) or look at the slices");
+        warn(set + " does not follow the shape: n-step IoU " + Fixed(iou, 3) + " (below " + Fixed(t.min_iou, 2) +
+             ", one-step " + Fixed(iou1, 3) + "); try fewer iterations (mesh.iterations) or look at the slices");
     }
     const json& s = f["start"];
     figures["start"] = {{"iou", s["iou"]}, {"saturated", s["saturated_fraction"]}, {"inverted", s["inverted"]}};
     if (s.value("inverted", false))
       warn("the start is inverted: L is not lower inside the shape than outside (medians " +
-           Decimals(s.value("median_L_inside", 0.0), 3) + " inside, " + Decimals(s.value("median_L_outside", 0.0), 3) +
+           Fixed(s.value("median_L_inside", 0.0), 3) + " inside, " + Fixed(s.value("median_L_outside", 0.0), 3) +
            " outside)");
     if (s.value("saturated_fraction", 0.0) > t.max_saturated)
-      warn("the start is saturated: tanh(alpha L) is flat in " + Decimals(s.value("saturated_fraction", 0.0), 3) +
-           " of the cells (above " + Decimals(t.max_saturated, 2) + "), where the optimizer has no gradient");
+      warn("the start is saturated: tanh(alpha L) is flat in " + Fixed(s.value("saturated_fraction", 0.0), 3) +
+           " of the cells (above " + Fixed(t.max_saturated, 2) + "), where the optimizer has no gradient");
   }
   const json ms = ReadStageFile(P("mesh/summary.json"));
   if (ms.is_object()) {
@@ -115,7 +111,7 @@ json RunQuality(const Experiment& e, const std::string& results, const QualityTh
   if (origin.is_object()) {
     figures["origin"] = origin;
     if (!origin.value("inside", true))
-      warn("the iteration's origin lies outside the shape (phi " + Decimals(origin.value("phi", 0.0), 3) +
+      warn("the iteration's origin lies outside the shape (phi " + Fixed(origin.value("phi", 0.0), 3) +
            " there): orbits are trapped at it, so the n-step set erodes or vanishes; " +
            (mod.is_object() ? "move the shape over it (modulus.offset, --offset)"
                             : "for a mesh target, target.origin \"inside\" (the default) puts it deep inside"));
@@ -134,22 +130,22 @@ std::string QualitySection(const json& q) {
   if (q["warnings"].empty()) md << "No warning.\n\n";
   md << "| figure | value |\n|---|---|\n";
   if (f.contains("one_step"))
-    md << "| one-step IoU / leak (" << f.value("lattice", 0) << "^3 lattice) | " << Decimals(f["one_step"]["iou"], 3)
-       << " / " << Decimals(f["one_step"]["leak"], 3) << " |\n";
+    md << "| one-step IoU / leak (" << f.value("lattice", 0) << "^3 lattice) | " << Fixed(f["one_step"]["iou"], 3)
+       << " / " << Fixed(f["one_step"]["leak"], 3) << " |\n";
   if (f.contains("n_step"))
-    md << "| n-step (n = " << f["n_step"].value("n", 0) << ") IoU / leak / fill | " << Decimals(f["n_step"]["iou"], 3)
-       << " / " << Decimals(f["n_step"]["leak"], 3) << " / " << Decimals(f["n_step"]["fill"], 3) << " |\n";
+    md << "| n-step (n = " << f["n_step"].value("n", 0) << ") IoU / leak / fill | " << Fixed(f["n_step"]["iou"], 3)
+       << " / " << Fixed(f["n_step"]["leak"], 3) << " / " << Fixed(f["n_step"]["fill"], 3) << " |\n";
   if (f.contains("mesh"))
     md << "| mesh components / open edges (away from the box faces) | " << f["mesh"]["components"].get<long long>()
        << " / " << f["mesh"]["open_edges"].get<long long>() << " (" << f["mesh"]["open_edges_inside"].get<long long>()
        << ") |\n";
   if (f.contains("start"))
-    md << "| start: one-step IoU / saturated cells / inverted | " << Decimals(f["start"]["iou"], 3) << " / "
-       << Decimals(f["start"]["saturated"], 3) << " / " << (f["start"]["inverted"].get<bool>() ? "**yes**" : "no")
+    md << "| start: one-step IoU / saturated cells / inverted | " << Fixed(f["start"]["iou"], 3) << " / "
+       << Fixed(f["start"]["saturated"], 3) << " / " << (f["start"]["inverted"].get<bool>() ? "**yes**" : "no")
        << " |\n";
   if (f.contains("origin"))
     md << "| origin inside the shape (phi there) | " << (f["origin"].value("inside", true) ? "yes" : "**no**") << " ("
-       << Decimals(f["origin"].value("phi", 0.0), 3) << ") |\n";
+       << Fixed(f["origin"].value("phi", 0.0), 3) << ") |\n";
   md << "\nFigures: `mesh/fidelity.h`, docs/fidelity.md; thresholds of the warnings: docs/experiments.md.\n\n";
   return md.str();
 }

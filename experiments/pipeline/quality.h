@@ -22,6 +22,9 @@ struct QualityThresholds {
   double max_saturated = 0.5;  // fraction of the start's cells with tanh flat above: no gradient
 };
 
+// `x` with `digits` decimals, as report.md writes its figures.
+std::string Fixed(double x, int digits);
+
 struct QualityOptions {
   // Lattice nodes per axis. 32: on the bunny's log-kernel map (401 roots, n = 4) the IoU and leak
   // are within 0.01 and 3 % of `quijibo fidelity`'s 72^3 figures (0.722 / 0.110 / 4.37 against

@@ -13,15 +13,6 @@ namespace quijibo::pipeline {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
-namespace {
-
-std::string Fixed(double x, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
-  return buf;
-}
-
-}  // namespace
 
 std::string RunReport(const Experiment& e, const std::vector<StageRecord>& records, const std::string& results,
                       double total_seconds, const RunState& state) {
