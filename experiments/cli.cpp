@@ -135,8 +135,8 @@ json EvaluateEnergy(const RationalMap& map, const EnergyGrid& grid, const Energy
 
 void AddEnergyCommand(CLI::App& app) {
   struct Args {
-    std::string target, map_path, out, weights = "layer", level_weights = "sample",
-        evaluator = "loglinear", precision = "double", storage = "auto", mode = "full";
+    std::string target, map_path, out, weights = WeightFieldName(kDefaultWeightField), level_weights = "sample",
+        evaluator = EvaluatorChoice{}.evaluator, precision = "double", storage = "auto", mode = "full";
     int resolution = 0, target_resolution = 97, repeats = 1;
     double alpha = 10.0, slice = 0.0;
     bool no_gradient = false;
@@ -156,7 +156,8 @@ void AddEnergyCommand(CLI::App& app) {
   c->add_option("-p,--precision", a->precision, "float, double, long-double or float128 (cached only)")
       ->capture_default_str()
       ->check(CLI::IsMember({"float", "double", "long-double", "float128"}));
-  c->add_option("-w,--weights", a->weights, "Weight field: layer (reference code) or inverse (paper, 1/phi)")
+  c->add_option("-w,--weights", a->weights,
+                "Weight field: balanced (the optimizer's), layer (reference code) or inverse (paper, 1/phi)")
       ->capture_default_str()
       ->check(CLI::IsMember({"layer", "inverse", "balanced"}));
   c->add_option("-r,--resolution", a->resolution,

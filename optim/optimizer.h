@@ -65,7 +65,7 @@ struct OptimizeOptions {
   std::string backend = "lbfgspp";      // "lbfgspp" (L-BFGS-B) or "ceres" (L-BFGS on x = y^2)
   // Balanced layer weights: a misclassified cell costs the same inside and outside, as in the IoU
   // (quijibo/target.h); kLayer is the reference code's, kInverse the paper's.
-  WeightField weights = WeightField::kBalanced;
+  WeightField weights = kDefaultWeightField;
   LevelWeights level_weights = LevelWeights::kSampleFinest;
   EnergyOptions energy;  // alpha
   // Where a level after the first starts: kLast, the last pass's map (the paper and reference);

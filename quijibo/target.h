@@ -29,6 +29,9 @@ enum class WeightField {
   // grows the set over the outside (docs/benchmarks.md, shape suite).
   kBalanced,
 };
+// The one default of every face (the optimizer, `quijibo energy`, Python's `energy`), so that an
+// energy evaluated on its own is the one the optimizer reports.
+inline constexpr WeightField kDefaultWeightField = WeightField::kBalanced;
 WeightField ParseWeightField(const std::string& name);  // "layer", "inverse" or "balanced"
 std::string WeightFieldName(WeightField w);
 

@@ -930,9 +930,10 @@ PYBIND11_MODULE(quijibo, m) {
         return s.str();
       });
   m.def("energy", &Energy, py::arg("map"), py::arg("grid"), py::kw_only(), py::arg("alpha") = EnergyOptions{}.alpha,
-        py::arg("evaluator") = "dense", py::arg("precision") = PrecisionName(cli::EvaluatorChoice{}.precision),
+        py::arg("evaluator") = cli::EvaluatorChoice{}.evaluator,
+        py::arg("precision") = PrecisionName(cli::EvaluatorChoice{}.precision),
         // The defaults of `quijibo energy`, so that the same call gives the same double.
-        py::arg("weights") = "layer", py::arg("resolution") = 0, py::arg("level_weights") = "sample",
+        py::arg("weights") = WeightFieldName(kDefaultWeightField), py::arg("resolution") = 0, py::arg("level_weights") = "sample",
         py::arg("slice") = 0.0, py::arg("mode") = "full", py::arg("gradient") = cli::EvaluatorChoice{}.gradient,
         py::arg("storage") = StorageName(cli::EvaluatorChoice{}.storage),
         py::arg("repeats") = cli::EvaluatorChoice{}.repeats,
