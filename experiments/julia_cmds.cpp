@@ -82,8 +82,7 @@ struct JuliaArgs {
   }
   // Translation and rotation into the options; the rotation's centre is the box's.
   void finish(const Vec3& box_center) {
-    if (o.translate)
-      for (std::size_t a = 0; a < o.translate->size(); ++a) o.julia.root_translation[a] = (*o.translate)[a];
+    o.julia = o.TranslatedJulia();
     if (!rotate.empty()) {
       o.rotation = ParseNumbers(rotate, "--rotate");
       if (o.rotation.size() != 4) throw Error("--rotate: expected ax,ay,az,degrees");

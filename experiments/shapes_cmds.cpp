@@ -51,8 +51,9 @@ json Measure(const FidelityArgs& a) {
   mesh::FidelityOptions o = a.o;
   o.reference_frame = a.iteration.iteration_frame == "reference";
   o.detail = a.iteration.detail;
-  if (a.iteration.translate)
-    for (std::size_t k = 0; k < a.iteration.translate->size(); ++k) o.julia.root_translation[k] = (*a.iteration.translate)[k];
+  pipeline::MeshStageOptions iteration = a.iteration;
+  iteration.julia = o.julia;
+  o.julia = iteration.TranslatedJulia();
   mesh::Fidelity f = mesh::MeasureSets(map, target, o);
   if (!a.julia_mesh.empty() || !a.shape_mesh.empty()) {
     if (a.julia_mesh.empty() || a.shape_mesh.empty())

@@ -4,6 +4,28 @@
 
 namespace quijibo::mesh {
 
+namespace {
+
+// Writes the field values of a batch and adds its counts to `stats` (may be null): the one
+// bookkeeping of both kernels.
+template <class Real>
+void RecordBatch(const JuliaResult<Real>* r, std::size_t n, double* values, JuliaFieldStats* stats) {
+  std::int64_t escaped = 0, bad = 0, applications = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    values[i] = ToDouble(r[i].log_modulus);
+    escaped += r[i].escaped;
+    applications += r[i].iterations;
+    bad += !std::isfinite(values[i]);
+  }
+  if (!stats) return;
+  stats->evaluations += std::int64_t(n);
+  stats->escaped += escaped;
+  stats->non_finite += bad;
+  stats->applications += applications;
+}
+
+}  // namespace
+
 BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, double iso, Precision precision,
                           JuliaFieldStats* stats, JuliaKernel kernel) {
   BatchField field;
@@ -14,39 +36,16 @@ BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, d
     field.evaluate = [jb, stats](const Vec3* points, std::size_t n, double* values) {
       std::vector<JuliaResult<double>> r(n);
       jb->At(points, n, r.data());
-      std::int64_t escaped = 0, bad = 0, applications = 0;
-      for (std::size_t i = 0; i < n; ++i) {
-        values[i] = r[i].log_modulus;
-        escaped += r[i].escaped;
-        applications += r[i].iterations;
-        bad += !std::isfinite(values[i]);
-      }
-      if (stats) {
-        stats->evaluations += std::int64_t(n);
-        stats->escaped += escaped;
-        stats->non_finite += bad;
-        stats->applications += applications;
-      }
+      RecordBatch(r.data(), n, values, stats);
     };
     return field;
   }
   DispatchPrecision(precision, [&]<class Real>() {
     auto jm = std::make_shared<const JuliaMap<Real>>(map, options);
     field.evaluate = [jm, stats](const Vec3* points, std::size_t n, double* values) {
-      std::int64_t escaped = 0, bad = 0, applications = 0;
-      for (std::size_t i = 0; i < n; ++i) {
-        const JuliaResult<Real> r = jm->At(points[i]);
-        values[i] = ToDouble(r.log_modulus);
-        escaped += r.escaped;
-        applications += r.iterations;
-        bad += !std::isfinite(values[i]);
-      }
-      if (stats) {
-        stats->evaluations += std::int64_t(n);
-        stats->escaped += escaped;
-        stats->non_finite += bad;
-        stats->applications += applications;
-      }
+      std::vector<JuliaResult<Real>> r(n);
+      for (std::size_t i = 0; i < n; ++i) r[i] = jm->At(points[i]);
+      RecordBatch(r.data(), n, values, stats);
     };
     return 0;
   });

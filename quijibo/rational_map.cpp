@@ -191,8 +191,9 @@ FractalFrame ReferenceFrame(const FractalFrame& frame) {
   return f;
 }
 
-RationalMap IterationMap(const RationalMap& map, bool reference_frame, double detail) {
-  RationalMap m = detail == 0.0 ? map : WithDetail(map, detail);
+RationalMap IterationMap(const RationalMap& map, bool reference_frame, double detail, double* lambda) {
+  if (lambda) *lambda = 1.0;
+  RationalMap m = detail == 0.0 ? map : WithDetail(map, detail, lambda);
   return reference_frame ? InFrame(m, ReferenceFrame(m.frame)) : m;
 }
 

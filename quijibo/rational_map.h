@@ -98,7 +98,8 @@ RationalMap InFrame(const RationalMap& map, const FractalFrame& to);
 
 // The map as the mesh stage and the fidelity measures iterate it: WithDetail(map, detail), then in
 // ReferenceFrame when `reference_frame`; `map` itself when detail is 0 and the frame the map's.
-RationalMap IterationMap(const RationalMap& map, bool reference_frame, double detail);
+// `lambda` (optional) receives WithDetail's factor (1 for detail 0).
+RationalMap IterationMap(const RationalMap& map, bool reference_frame, double detail, double* lambda = nullptr);
 
 // The reference code's world frame for a map's normalization (quijibo-code.md §2): the origin at
 // the centre of the mesh's bounding box and the longest side 3 units (fractal radius 4 with the

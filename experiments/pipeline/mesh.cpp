@@ -86,6 +86,13 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
   return s;
 }
 
+JuliaOptions MeshStageOptions::TranslatedJulia() const {
+  JuliaOptions j = julia;
+  if (translate)
+    for (std::size_t a = 0; a < translate->size(); ++a) j.root_translation[a] = (*translate)[a];
+  return j;
+}
+
 std::string MeshStageOptions::Validate() const {
   if (std::string why = Settings().Check(*this); !why.empty()) return why;
   if (!box.empty() && box.size() != 6) return "box: expected xmin,ymin,zmin,xmax,ymax,zmax";
@@ -121,9 +128,7 @@ bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& o, m
 MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& o, const Mesher& mesher) {
   if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
   MeshStageResult r;
-  // IterationMap, keeping the exponents' factor for the summary.
-  RationalMap map = o.detail == 0.0 ? input_map : WithDetail(input_map, o.detail, &r.lambda);
-  if (o.iteration_frame == "reference") map = InFrame(map, ReferenceFrame(map.frame));
+  const RationalMap map = IterationMap(input_map, o.iteration_frame == "reference", o.detail, &r.lambda);
   r.frame = map.frame;
   r.meshing = o.meshing;
   mesh::MeshingOptions& m = r.meshing;
@@ -134,9 +139,7 @@ MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& 
   if (o.box.size() == 6)
     for (int a = 0; a < 3; ++a) m.min_corner[a] = o.box[a], m.max_corner[a] = o.box[3 + a];
   if (auto why = m.validate(); !why.empty()) throw Error("mesh: " + why);
-  r.julia = o.julia;
-  if (o.translate)
-    for (std::size_t a = 0; a < o.translate->size(); ++a) r.julia.root_translation[a] = (*o.translate)[a];
+  r.julia = o.TranslatedJulia();
   if (o.rotation.size() == 4) {
     const Vec3 center{(m.min_corner[0] + m.max_corner[0]) / 2, (m.min_corner[1] + m.max_corner[1]) / 2,
                       (m.min_corner[2] + m.max_corner[2]) / 2};

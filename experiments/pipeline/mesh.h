@@ -34,6 +34,8 @@ struct MeshStageOptions {
   // Root translation x, y, z[, k] in the iteration frame (julia.root_translation; the reference's
   // "root translation"); none: julia.root_translation as it is.
   std::optional<std::vector<double>> translate;
+  // `julia` with `translate` (when set) as its root translation.
+  JuliaOptions TranslatedJulia() const;
   // The frame the map is iterated in: "map" (the frame it was optimized in) or "reference" (the
   // reference code's world frame, ReferenceFrame in rational_map.h, where the paper's translations
   // 1.41 / 0.54 / 1.07 are given). The one-step set is the same in both; the box and `translate`

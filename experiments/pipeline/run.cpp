@@ -381,8 +381,7 @@ void Runner::Quijibo() {
   set.iterations = e_.mesh.julia.iterations;
   set.escape_radius = e_.mesh.julia.escape_radius;
   set.slice = e_.mesh.julia.slice;
-  if (e_.mesh.translate)
-    for (std::size_t a = 0; a < e_.mesh.translate->size(); ++a) set.root_translation[a] = (*e_.mesh.translate)[a];
+  set.root_translation = e_.mesh.TranslatedJulia().root_translation;
   QualityOptions qo;
   qo.detail = e_.mesh.detail;
   qo.reference_frame = e_.mesh.iteration_frame == "reference";
