@@ -20,6 +20,7 @@ struct QualityThresholds {
   double max_leak = 0.05;      // one-step or n-step leak above: set outside the shape box
   double max_fill = 0.5;       // fraction of the lattice in the n-step set above: it fills the box
   double max_saturated = 0.5;  // fraction of the start's cells with tanh flat above: no gradient
+  double max_iou_loss = 0.002;  // one-step IoU on the target grid lost by the optimization above
 };
 
 // `x` with `digits` decimals, as report.md writes its figures.

@@ -1,0 +1,99 @@
+// The Quality section's verdict on the optimization itself: the one-step IoU on the target grid
+// before and after (experiments/pipeline/quality.h).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "experiments/pipeline/quality.h"
+#include "monopole/kernel_fit.h"
+#include "quijibo/grid.h"
+#include "quijibo/rational_map.h"
+
+namespace quijibo::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// A run folder holding only the fidelity stage's figures, as RunQuality reads them.
+std::string FolderWithFidelity(const std::string& name, const json& fidelity) {
+  const std::string dir = (fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()))).string();
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/fidelity");
+  std::ofstream(dir + "/fidelity/fidelity.json") << fidelity.dump(1);
+  return dir;
+}
+
+json Fidelity(double start_iou, double optimized_iou) {
+  return {{"lattice", 32},
+          {"iterations", 1},
+          {"one_step", {{"iou", 0.95}, {"leak", 0.0}}},
+          {"start", {{"iou", start_iou}, {"saturated_fraction", 0.0}, {"inverted", false}}},
+          {"target_grid", {{"resolution", 97}, {"start_iou", start_iou}, {"iou", optimized_iou}}}};
+}
+
+bool Warns(const json& q, const std::string& what) {
+  for (const json& w : q["warnings"])
+    if (w.get<std::string>().find(what) != std::string::npos) return true;
+  return false;
+}
+
+TEST(Quality, AnOptimizationThatLosesIoUOnTheTargetGridIsWarnedAbout) {
+  const std::string dir = FolderWithFidelity("quality_loss", Fidelity(0.9778, 0.9628));
+  const json q = RunQuality(Experiment{}, dir);
+  EXPECT_TRUE(Warns(q, "the optimization made the one-step set worse on the target grid: IoU 0.9778 at the "
+                       "start, 0.9628 optimized"))
+      << q;
+  EXPECT_EQ(q["figures"]["target_grid"]["iou"], 0.9628);
+  EXPECT_NE(QualitySection(q).find("| one-step IoU on the target grid (97^3): start -> optimized | 0.9778 -> 0.9628 |"),
+            std::string::npos)
+      << QualitySection(q);
+  fs::remove_all(dir);
+}
+
+TEST(Quality, AGainOrALossWithinTheToleranceIsNotWarnedAbout) {
+  for (const double after : {0.9807, 0.9778, 0.9778 - 0.0015}) {
+    const std::string dir = FolderWithFidelity("quality_gain", Fidelity(0.9778, after));
+    const json q = RunQuality(Experiment{}, dir);
+    EXPECT_FALSE(Warns(q, "worse on the target grid")) << q;
+    fs::remove_all(dir);
+  }
+}
+
+// MeasureQuality states the chosen map's IoU on the target grid beside the start's: a map with a
+// larger one-step ball than the target's sphere scores lower than one that matches it.
+TEST(Quality, MeasureQualityGivesTheChosenMapsIoUOnTheTargetGrid) {
+  ScalarGrid sphere;
+  sphere.frame = GridFrame::Cube(24, {0.0, 0.0, 0.0}, 3.0);
+  sphere.values.resize(sphere.frame.cell_count());
+  for (int k = 0; k < 24; ++k)
+    for (int j = 0; j < 24; ++j)
+      for (int i = 0; i < 24; ++i) {
+        const Vec3 p = sphere.frame.cell_center(i, j, k);
+        sphere.at(i, j, k) = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1.0;
+      }
+  // R = e^C q: the one-step set is the ball of radius e^-C.
+  auto ball = [](double radius) {
+    RationalMap m;
+    m.top_roots = {Vec4{0.0, 0.0, 0.0, 0.0}};
+    m.top_exponents = {1.0};
+    m.ln_C = -std::log(radius);
+    return m;
+  };
+  JuliaOptions julia;
+  julia.iterations = 1;
+  QualityOptions options;
+  options.lattice = 16;
+  const json j = MeasureQuality(ball(1.0), ball(1.3), sphere, julia, 0.0, 10.0, nullptr, options);
+  const double start = j["target_grid"]["start_iou"], optimized = j["target_grid"]["iou"];
+  EXPECT_EQ(start, monopole::CheckStart(ball(1.0), sphere).iou);
+  EXPECT_GT(start, 0.9);
+  EXPECT_LT(optimized, 0.6);  // (1 / 1.3)^3 = 0.455 of the larger ball is the sphere
+  EXPECT_EQ(j["target_grid"]["resolution"], 24);
+}
+
+}  // namespace
+}  // namespace quijibo::pipeline
