@@ -39,7 +39,7 @@ struct FidelityOptions {
   double extend = 0.2;          // growth of B on every side, as a fraction of its side
   JuliaOptions julia;           // the n-step field (iterations 0: skip it)
   bool reference_frame = false;  // the n-step set iterated in the reference frame (ReferenceFrame)
-  double detail = 0.0;           // ... of the map with this detail (WithDetail)
+  double detail = kSmoothDetail;  // ... of the map with this detail (WithDetail)
   int closing = 2;              // closed IoU: half side of the closing's cube, lattice cells, in [0, 16]
   double iso = 0.0;
   int surface_samples = 20000;  // points per mesh for Chamfer and Hausdorff

@@ -248,7 +248,7 @@ RationalMap WithDetail(const RationalMap& map, double detail, double* lambda) {
   if (detail > 0) {
     const double width = detail / 100.0 * map.frame.fractal_radius * (1.0 - 2.0 * map.frame.padding);
     const double steep = SurfaceSteepness(map);
-    if (steep > 0) l = std::min(1.0, 2.0 / (width * steep));
+    if (steep > 0) l = 2.0 / (width * steep);
   }
   if (lambda) *lambda = l;
   RationalMap m = map;

@@ -208,10 +208,15 @@ TEST(Julia, DetailWidensTheBandAboutTheSurfaceAndKeepsTheOneStepSet) {
     EXPECT_EQ(a < 0, b < 0);
     EXPECT_NEAR(b, lambda * a, 1e-9 * (1 + std::abs(a)));
   }
-  // A band already wider than asked: the map as it is. Detail 0: the map as it is.
-  EXPECT_EQ(WithDetail(m, 1e-6, &lambda).tau, m.tau);
+  // A band narrower than the map's: the map is made steeper (a gentle optimized map meshed smooth),
+  // the one-step set again the same. Detail 0: the map as it is.
+  const RationalMap s = WithDetail(m, 0.5, &lambda);
+  EXPECT_NEAR(lambda, 2.0 / (0.015 * 40.0), 0.05);
+  EXPECT_GT(lambda, 1.0);
+  EXPECT_NEAR(SurfaceSteepness(s), 40.0 * lambda, 0.5 * lambda);
+  for (const Vec3& p : Points(200, 10)) EXPECT_EQ(OneStepLogModulus(m, p) < 0, OneStepLogModulus(s, p) < 0);
+  EXPECT_EQ(WithDetail(m, 0.0, &lambda).ln_C, m.ln_C);
   EXPECT_EQ(lambda, 1.0);
-  EXPECT_EQ(WithDetail(m, 0.0).ln_C, m.ln_C);
   EXPECT_THROW(WithDetail(m, -1.0), Error);
   EXPECT_THROW(WithDetail(m, std::nan("")), Error);
   // The iteration map: detail, then the reference frame.

@@ -67,7 +67,7 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
           .Number(
               "detail", "--detail",
               "Fractal detail: the width of the band |L| < 1 about the surface, percent of the shape's size; the "
-              "one-step set stays (0: as optimized, smooth; 2: rough; 5: folds and flakes; docs/meshing.md)",
+              "one-step set stays (0.25: smooth; 0: as optimized; 2: rough; 8: intricate; docs/meshing.md)",
               [](auto& o) -> double& { return o.detail; }, 0.0, 100.0)
           .Choice("frame", "--frame", "Coordinates of the output: user (the input mesh's) or fractal",
                   [](auto& o) -> std::string& { return o.frame; }, {"user", "fractal"})

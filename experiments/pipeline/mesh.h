@@ -43,7 +43,7 @@ struct MeshStageOptions {
   std::string iteration_frame = "map";
   // Fractal detail (WithDetail, rational_map.h): the width of the band |L| < 1 about the one-step
   // surface, percent of the shape's size; the one-step set stays. 0: the map as optimized.
-  double detail = 0.0;
+  double detail = kSmoothDetail;
   std::vector<std::string> vdb_grids{"surface", "density"};  // of the .vdb: surface, density, field
   double vdb_band = 3.0;                                     // half-width of the level set's narrow band, voxels
   bool ply_double = false;                                   // PLY coordinates as double

@@ -32,7 +32,7 @@ struct QualityOptions {
   // 0.712 / 0.113 / 4.24) for an eleventh of the work: seconds, not most of a minute.
   int lattice = 32;
   // The n-step set as the mesh stage iterates it (its `detail` and `iteration_frame`).
-  double detail = 0.0;
+  double detail = kSmoothDetail;
   bool reference_frame = false;
 };
 
