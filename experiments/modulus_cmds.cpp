@@ -54,9 +54,11 @@ void AddModulusCommands(CLI::App& app) {
     BindSettings(c, a->o);
     c->add_flag("--2d", a->o.two_d, "Complex plane (slice z = 0 of a 3D target); implied by a .png output");
     c->add_option("--authors-frame", a->o.authors_frame,
-                  "Compatibility: read the target the way the authors' code reads its SDF file (x and z swapped, "
-                  "stretched by (NODES-1)/RES; docs/modulus-portals.md). RES = their sdfGen resolution, NODES = "
-                  "nodes per side of their .f3d (default RES-1)")
+                  "Compatibility: reproduce the authors' program from its own inputs (docs/modulus-portals.md): "
+                  "read the target as it reads its SDF file (x and z swapped, stretched by (NODES-1)/RES; RES = "
+                  "their sdfGen resolution, NODES = nodes per side of their .f3d, default RES), and take --alpha, "
+                  "--beta (and --params values) as their a and b: distances in the mesh file's units, "
+                  "exp(a (d - b)); the report's alpha and beta are the converted a/s and -b s")
         ->expected(1, 2)
         ->delimiter(',');
     AddVersorOptions(c, a->o.versor, &a->write_poly);

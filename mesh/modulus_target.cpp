@@ -50,6 +50,7 @@ LoadedTarget LoadModulusTarget(const std::string& spec, int sdf_resolution) {
     Vec3 c{0, 0, 0};
     t.grid = UnitFrameMeshSdf(spec, sdf_resolution, &t.mesh_unit, &s, &c);
     t.target = ModulusTargetFromUnitGrid(t.grid);
+    t.unit_per_source = s;
     t.info = {{"kind", "mesh"},
               {"file", spec},
               {"unit_frame", {{"scale", s}, {"mesh_center", {c[0], c[1], c[2]}}}},
@@ -61,6 +62,7 @@ LoadedTarget LoadModulusTarget(const std::string& spec, int sdf_resolution) {
     const bool have_frame = std::filesystem::exists(frame_path);
     if (have_frame) f = ReadFrameJson(frame_path);
     t.target = ModulusTargetFromGrid(t.grid, f.fractal_radius, f.padding, &t.unit_per_grid);
+    t.unit_per_source = t.unit_per_grid;
     t.info = {{"kind", "qgrid"},
               {"file", spec},
               {"frame_file", have_frame ? frame_path : "(none: defaults)"},

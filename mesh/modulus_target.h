@@ -28,6 +28,9 @@ struct LoadedTarget {
   ModulusTarget target;
   std::shared_ptr<ScalarGrid> grid;  // the SDF, when there is one
   double unit_per_grid = 1.0;        // unit-frame length per grid-frame length
+  // Unit-frame length per length unit of the target's file: a mesh's normalization scale, a
+  // .qgrid's unit_per_grid, 1 for analytic targets (the units the authors' SDF would hold).
+  double unit_per_source = 1.0;
   TriangleMesh mesh_unit;            // the target mesh in the unit frame (mesh targets only)
   nlohmann::json info = nlohmann::json::object();
 };

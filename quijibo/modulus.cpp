@@ -80,14 +80,16 @@ ModulusTarget ModulusTargetFromUnitGrid(std::shared_ptr<const ScalarGrid> grid) 
 
 std::string AuthorsFrame::validate() const {
   if (sdf_resolution < 1) return "authors' frame: the SDF resolution must be >= 1";
-  if (nodes < 2) return "authors' frame: the node count must be >= 2";
+  if (nodes != 0 && nodes < 2) return "authors' frame: the node count must be >= 2 (or 0: the SDF resolution)";
+  if (node_count() < 2) return "authors' frame: the node count (the SDF resolution) must be >= 2";
+  if (!(unit_scale > 0) || !std::isfinite(unit_scale)) return "authors' frame: the unit scale must be a positive number";
   return {};
 }
 
 ModulusTarget InAuthorsFrame(const ModulusTarget& target, const AuthorsFrame& frame) {
   if (auto why = frame.validate(); !why.empty()) throw Error(why);
   if (target.dimension != 3) throw Error("authors' frame: only for 3D targets");
-  const double stretch = double(frame.nodes - 1) / double(frame.sdf_resolution);
+  const double stretch = double(frame.node_count() - 1) / double(frame.sdf_resolution);
   auto g = [stretch](double t) { return -0.5 + (std::clamp(t, -0.5, 0.5) + 0.5) * stretch; };
   auto g_inverse = [stretch](double u) { return -0.5 + (u + 0.5) / stretch; };
   ModulusTarget out = target;
@@ -97,6 +99,20 @@ ModulusTarget InAuthorsFrame(const ModulusTarget& target, const AuthorsFrame& fr
     out.box_max[a] = std::clamp(g_inverse(target.box_max[2 - a]), -0.5, 0.5);
   }
   out.name = target.name + " (authors' frame)";
+  return out;
+}
+
+ShapeModulusOptions AuthorsParameters(const ShapeModulusOptions& theirs, const AuthorsFrame& frame) {
+  if (auto why = frame.validate(); !why.empty()) throw Error(why);
+  const double s = frame.unit_scale;
+  auto scaled = [](ParameterField f, double k) {
+    f.value = f.value * k + 0.0;  // + 0.0: a zero stays +0 (no "-0" in reports)
+    for (ParameterField::Region& r : f.regions) r.value = r.value * k + 0.0;
+    return f;
+  };
+  ShapeModulusOptions out = theirs;
+  out.alpha = scaled(theirs.alpha, 1.0 / s);
+  out.beta = scaled(theirs.beta, -s);
   return out;
 }
 

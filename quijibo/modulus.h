@@ -75,10 +75,20 @@ ModulusTarget AnalyticModulusTarget(const std::string& spec);
 // the way their code reads its file: phi'(x, y, z) = phi(g(z), g(y), g(x)) with
 // g(t) = -0.5 + (clamp(t, -0.5, 0.5) + 0.5) (nodes - 1) / sdf_resolution; its box is the image of
 // the target's box. The versor's roots are NOT moved (neither are they in their code). Throws
-// quijibo::Error unless 2 <= nodes and 1 <= sdf_resolution, and for 2D targets.
+// quijibo::Error for invalid options and for 2D targets.
+//
+// Their SDF also keeps the distances of the mesh file's own units, and their code uses them
+// unscaled in exp(a (d - b)). With s = unit_scale (unit-frame length per unit of the file the SDF
+// was made from), d = phi / s, so their (a, b) are alpha = a / s, beta = -b s here:
+// AuthorsParameters converts them.
 struct AuthorsFrame {
   int sdf_resolution = 100;  // their sdfGen resolution (node spacing 1 / sdf_resolution)
-  int nodes = 99;            // nodes per side of their .f3d (sdfGen gave 99 for 100 in the baseline)
+  // Nodes per side of their .f3d; 0 means sdf_resolution. Their sdfGen truncates a float ratio, so
+  // the count depends on the mesh: 100 for data/bunny.obj at 100, 99 for the reference notes'
+  // pre-normalized bunny.
+  int nodes = 0;
+  double unit_scale = 1.0;  // s, > 0 (a mesh target: its normalization scale)
+  int node_count() const { return nodes > 0 ? nodes : sdf_resolution; }
   std::string validate() const;
 };
 ModulusTarget InAuthorsFrame(const ModulusTarget& target, const AuthorsFrame& frame);
@@ -141,6 +151,11 @@ struct ShapeModulusOptions {
   Vec3 origin_offset{0.0, 0.0, 0.0};
   std::string validate() const;
 };
+
+// The authors' a and b (fields too: every value of a field is converted, masks and feathers kept,
+// which converts the blended field exactly) as this toolkit's alpha and beta: alpha = a / s,
+// beta = -b s, s = frame.unit_scale (see AuthorsFrame). The origin offset is kept.
+ShapeModulusOptions AuthorsParameters(const ShapeModulusOptions& theirs, const AuthorsFrame& frame);
 
 class ShapeModulusMap : public QuaternionMap {
  public:

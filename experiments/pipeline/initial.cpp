@@ -87,8 +87,9 @@ const Schema<O>& O::Settings() {
           .When(Kind({"monopoles"}))
           .Enum(
               "fit_target", "--fit-target",
-              "monopoles: reference: fit 1 - P as the reference code (top and bottom roots, the paper's results); "
-              "potential: fit P as the paper's text (positive monopoles only)",
+              "monopoles: potential: fit P as the paper's text (a few positive monopoles); reference: fit 1 - P as "
+              "the reference code (hundreds of both signs; on the default unit target box it misses epsilon and its "
+              "start is inverted or collapses, docs/benchmarks.md §2)",
               {"reference", "potential"},
               [](const O& o) {
                 return o.monopole.target == monopole::MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
@@ -215,6 +216,46 @@ json O::ToJson() const {
   return j;
 }
 
+MonopoleStartVerdict JudgeMonopoleStart(const monopole::GreedyFitSummary& fit, double epsilon, int candidates,
+                                        const monopole::StartCheck& start) {
+  MonopoleStartVerdict v;
+  char fit_text[256];
+  std::snprintf(fit_text, sizeof fit_text,
+                "the greedy fit reached relative residual %.4g against epsilon %.4g (%s, %d monopoles, %d of %d "
+                "candidates examined)",
+                fit.final_relative_residual, epsilon, monopole::ToString(fit.stop), fit.monopoles,
+                fit.candidates_examined, candidates);
+  if (start.inverted) {
+    char text[1024];
+    std::snprintf(text, sizeof text,
+                  "the monopole start is inverted: L is not lower inside the shape than outside (medians %.3g "
+                  "inside, %.3g outside; one-step IoU %.3g), and the optimizer cannot recover from that (it stalls "
+                  "and ends with an empty set); %s. Fit the potential P as the paper's text (\"fit_target\": "
+                  "\"potential\", the default; --fit-target potential), or use the log-kernel fit (\"kind\": "
+                  "\"log-kernel\"; --initializer log-kernel) (docs/benchmarks.md §2)",
+                  start.median_inside, start.median_outside, start.iou, fit_text);
+    v.refusal = text;
+    return v;
+  }
+  std::string warning;
+  if (fit.final_relative_residual > epsilon)
+    warning = fit_text + std::string("; raise \"candidates\" (--candidates) or \"epsilon\" (--epsilon)");
+  // Measured at 97^3 (docs/benchmarks.md §2): the starts the optimizer collapsed from to an empty
+  // set had one-step IoU 0.06-0.11, the ones it optimized 0.54-0.58.
+  constexpr double kLowStartIou = 0.25;
+  if (start.iou < kLowStartIou) {
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "the monopole start's one-step set overlaps the shape little (IoU %.3g): the optimizer may "
+                  "collapse to an empty set; fit P (\"fit_target\": \"potential\") or use \"kind\": "
+                  "\"log-kernel\"",
+                  start.iou);
+    warning += (warning.empty() ? "" : "; ") + std::string(text);
+  }
+  v.warning = warning;
+  return v;
+}
+
 InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
   if (std::string why = o.Validate(); !why.empty()) throw Error("initial: " + why);
   InitialGuessResult res;
@@ -285,7 +326,12 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
                           {"monopoles", mono.monopoles.size()}};
   }
   const monopole::StartCheck start = monopole::CheckStart(res.map, target.grid, o.guess.alpha);
-  if (start.inverted)
+  if (o.kind == "monopoles") {
+    const monopole::MonopoleOptions mo = o.Monopoles();
+    const MonopoleStartVerdict verdict = JudgeMonopoleStart(mono.fit, mo.fit.epsilon, mono.candidates, start);
+    if (!verdict.refusal.empty()) throw Error("initial: " + verdict.refusal);
+    if (!verdict.warning.empty()) std::fprintf(stderr, "quijibo: warning: %s\n", verdict.warning.c_str());
+  } else if (start.inverted)
     std::fprintf(stderr,
                  "quijibo: warning: the initial map is inverted: L is not lower inside the shape than outside "
                  "(medians %.3g inside, %.3g outside); the optimizer may not recover\n",
@@ -331,6 +377,8 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
                   {"positive", mono.positive_count()},
                   {"negative", mono.negative_count()},
                   {"relative_residual", mono.fit.final_relative_residual},
+                  {"epsilon", o.Monopoles().fit.epsilon},
+                  {"fit_stop", monopole::ToString(mono.fit.stop)},
                   {"steps", mono.fit.steps},
                   {"shell_points", mono.shell_points},
                   {"candidates", mono.candidates},

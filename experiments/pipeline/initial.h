@@ -60,8 +60,18 @@ struct InitialGuessResult {
   std::shared_ptr<Image> picture;
 };
 
+// What the paper's monopole start is worth: `refusal` (non-empty) when the start is inverted, which
+// the optimizer cannot recover from (it stalls and ends with an empty set, issue 29); `warning`
+// when the greedy fit stopped above epsilon. Both say what to do instead.
+struct MonopoleStartVerdict {
+  std::string refusal, warning;
+};
+MonopoleStartVerdict JudgeMonopoleStart(const monopole::GreedyFitSummary& fit, double epsilon, int candidates,
+                                        const monopole::StartCheck& start);
+
 // The initial map for `target` (Target()): log-kernel and monopoles need a mesh target. Prints a
-// warning on stderr when the start is inverted (L not lower inside than outside).
+// warning on stderr when the start is inverted (L not lower inside than outside); for monopoles an
+// inverted start is refused (quijibo::Error, JudgeMonopoleStart), and a fit above epsilon warned of.
 InitialGuessResult InitialGuess(const TargetResult& target, const InitialGuessStageOptions& options);
 
 // map.json, and for the fits roots.ply, the picture and monopoles.json, into `dir`.

@@ -132,13 +132,23 @@ ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions&
   if (o.params) mesh::ReadModulusParams(*o.params, so, o.sdf_resolution);
   ModulusStageResult res;
   res.versor = o.versor.Make(lt.target);  // roots in the target's own frame
+  json authors = nullptr;
   if (!o.authors_frame.empty()) {
     if (two_d) throw Error("--authors-frame is for 3D targets");
+    if (o.authors_frame.size() > 2) throw Error("--authors-frame: expected RES or RES,NODES");
     AuthorsFrame af;
     af.sdf_resolution = o.authors_frame[0];
-    af.nodes = o.authors_frame.size() > 1 ? o.authors_frame[1] : af.sdf_resolution - 1;
+    if (o.authors_frame.size() > 1) af.nodes = o.authors_frame[1];
+    af.unit_scale = lt.unit_per_source;
+    if (auto why = af.validate(); !why.empty()) throw Error("--authors-frame: " + why);
     lt.target = InAuthorsFrame(lt.target, af);
-    lt.info["authors_frame"] = {{"sdf_resolution", af.sdf_resolution}, {"nodes", af.nodes}};
+    // alpha, beta (numbers or --params fields) were given as the authors' a and b.
+    authors = {{"sdf_resolution", af.sdf_resolution},
+               {"nodes", af.node_count()},
+               {"unit_scale", af.unit_scale},
+               {"their_alpha", ParameterFieldToJson(so.alpha)},
+               {"their_beta", ParameterFieldToJson(so.beta)}};
+    so = AuthorsParameters(so, af);
   }
   auto map = std::make_shared<ShapeModulusMap>(lt.target, res.versor, so);
   IterationOptions jo;
@@ -160,6 +170,7 @@ ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions&
                 {"alpha", ParameterFieldToJson(so.alpha)},
                 {"beta", ParameterFieldToJson(so.beta)},
                 {"origin", {{"phi", phi_origin}, {"inside", phi_origin < 0}}}};
+  if (!authors.is_null()) res.report["authors_frame"] = authors;
   return res;
 }
 

@@ -35,7 +35,9 @@ struct ModulusStageOptions {
   VersorOptions versor;
   ProductOutputOptions output;
   bool two_d = false;              // the complex plane (slice z = 0 of a 3D target)
-  std::vector<int> authors_frame;  // read the target as the authors' code: RES[, NODES]
+  // Read the target as the authors' code does, RES[, NODES] (NODES defaults to RES), and take
+  // alpha and beta as their a and b (AuthorsParameters). Command line only: no experiment key.
+  std::vector<int> authors_frame;
 
   std::string Validate() const;
   static const Schema<ModulusStageOptions>& Settings();

@@ -67,9 +67,9 @@ TEST(ExperimentSchema, EachKindOfInitialGuessResolvesToItsDefaults) {
   random.kind = "random";
   EXPECT_EQ(r["initial"], random.ToJson());
   EXPECT_EQ(r["initial"]["top"], RandomMapOptions{}.top);
-  // The monopole fit's target: 1 - P, as the reference code (MonopoleOptions owns it).
+  // The monopole fit's target: P, as the paper's text (MonopoleOptions owns it).
   EXPECT_EQ(Resolve({{"target", {{"mesh", kBunny}}}, {"initial", {{"kind", "monopoles"}}}})["initial"]["fit_target"],
-            "reference");
+            "potential");
   // The top-level seed is the default of every seed.
   const json seeded = Resolve({{"seed", 7}, {"target", {{"mesh", kBunny}}}, {"initial", {{"kind", "monopoles"}}}});
   EXPECT_EQ(seeded["initial"]["seed"], 7);

@@ -1,0 +1,87 @@
+// The paper's monopole start (initial kind "monopoles"): an inverted start is refused with what to
+// do, a fit above epsilon is warned of, and a simple shape gets an upright start (issue 29).
+#include <gtest/gtest.h>
+
+#include "experiments/pipeline/initial.h"
+#include "experiments/pipeline/target.h"
+#include "mesh/triangle_mesh.h"
+#include "quijibo/error.h"
+#include "tests/mesh/mesh_fixtures.h"
+
+namespace quijibo::pipeline {
+namespace {
+
+monopole::GreedyFitSummary Fit(double residual, monopole::FitStop stop) {
+  monopole::GreedyFitSummary f;
+  f.final_relative_residual = residual;
+  f.stop = stop;
+  f.monopoles = 1000;
+  f.candidates_examined = 100000;
+  return f;
+}
+
+TEST(MonopoleStart, AnInvertedStartIsRefusedWithTheResidualAndWhatToDo) {
+  monopole::StartCheck start;
+  start.median_inside = -0.607;
+  start.median_outside = -0.656;
+  start.iou = 0.0914;
+  start.inverted = true;
+  const MonopoleStartVerdict v =
+      JudgeMonopoleStart(Fit(0.0407289, monopole::FitStop::kCandidatesExhausted), 0.04, 100000, start);
+  ASSERT_FALSE(v.refusal.empty());
+  for (const char* part : {"inverted", "0.04073", "0.04 ", "candidates exhausted", "-0.607", "-0.656", "0.0914",
+                           "\"fit_target\": \"potential\"", "log-kernel"})
+    EXPECT_NE(v.refusal.find(part), std::string::npos) << part << " in: " << v.refusal;
+}
+
+// The tooth's 1 - P start on the unit box (issue 29): upright by the medians, but the optimizer
+// collapsed from it to an empty set.
+TEST(MonopoleStart, AStartThatBarelyOverlapsTheShapeIsWarnedOf) {
+  monopole::StartCheck start;
+  start.median_inside = -0.36;
+  start.median_outside = -0.22;
+  start.iou = 0.108;
+  const MonopoleStartVerdict v =
+      JudgeMonopoleStart(Fit(0.041, monopole::FitStop::kCandidatesExhausted), 0.04, 100000, start);
+  EXPECT_TRUE(v.refusal.empty());
+  for (const char* part : {"0.041", "--candidates", "IoU 0.108", "empty set", "potential"})
+    EXPECT_NE(v.warning.find(part), std::string::npos) << part << " in: " << v.warning;
+}
+
+TEST(MonopoleStart, AnUprightConvergedStartPassesAndAnUnconvergedOneIsWarnedOf) {
+  monopole::StartCheck start;
+  start.median_inside = -1.4;
+  start.median_outside = -0.19;
+  start.iou = 0.28;
+  EXPECT_TRUE(JudgeMonopoleStart(Fit(0.0396, monopole::FitStop::kConverged), 0.04, 100000, start).refusal.empty());
+  EXPECT_TRUE(JudgeMonopoleStart(Fit(0.0396, monopole::FitStop::kConverged), 0.04, 100000, start).warning.empty());
+  const MonopoleStartVerdict v =
+      JudgeMonopoleStart(Fit(0.05, monopole::FitStop::kMaxMonopoles), 0.04, 100000, start);
+  EXPECT_TRUE(v.refusal.empty());
+  EXPECT_NE(v.warning.find("0.05"), std::string::npos) << v.warning;
+  EXPECT_NE(v.warning.find("max_monopoles reached"), std::string::npos) << v.warning;
+}
+
+// A sphere, small enough for seconds: the paper's fit converges and its start is upright, on the
+// default (unit) target box.
+TEST(MonopoleStart, TheSphereGetsAConvergedUprightStart) {
+  const testing::TempDir dir;
+  const std::string path = dir.file("sphere.obj");
+  mesh::WriteObj(path, testing::Icosphere(3));
+  TargetOptions t;
+  t.mesh = path;
+  t.resolution = 24;
+  const TargetResult target = Target(t);
+  InitialGuessStageOptions o;
+  o.kind = "monopoles";
+  o.monopole.sampling.count = 4000;
+  o.png_size = 32;
+  const InitialGuessResult r = InitialGuess(target, o);
+  EXPECT_LE(r.summary.at("relative_residual").get<double>(), 0.04);
+  EXPECT_EQ(r.summary.at("fit_stop").get<std::string>(), "converged");
+  EXPECT_FALSE(r.summary.at("start").at("inverted").get<bool>());
+  EXPECT_GT(r.summary.at("start").at("iou").get<double>(), 0.25);  // no low-overlap warning
+}
+
+}  // namespace
+}  // namespace quijibo::pipeline
