@@ -65,6 +65,25 @@ const Schema<OutputsOptions>& OutputsOptions::Settings() {
   return s;
 }
 
+json DescribeSettings() {
+  ModulusStageOptions modulus;
+  PortalStageOptions portal;
+  return {{"", Top::Settings().Describe()},
+          {"target", TargetOptions::Settings().Describe()},
+          {"initial", InitialGuessStageOptions::Settings().Describe()},
+          {"optimizer", optim::OptimizeOptions::Settings().Describe()},
+          {"optimizer/schedule", optim::PassSpec::Settings().Describe()},
+          {"mesh", MeshStageOptions::Settings().Describe()},
+          {"modulus", ModulusStageOptions::Settings().Describe()},
+          {"modulus/versor", VersorOptions::Settings().Describe()},
+          {"modulus/output", ProductOutputOptions::Settings().Describe(modulus.output)},
+          {"portal", PortalStageOptions::Settings().Describe()},
+          {"portal/output", ProductOutputOptions::Settings().Describe(portal.output)},
+          {"pictures", PicturesOptions::Settings().Describe()},
+          {"outputs", OutputsOptions::Settings().Describe()},
+          {"energy", EnergyStageOptions::Settings().Describe()}};
+}
+
 Experiment Experiment::FromFile(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path + ": no such file");
