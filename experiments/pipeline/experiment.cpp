@@ -60,8 +60,12 @@ const Schema<OutputsOptions>& OutputsOptions::Settings() {
           .Path(
               "folder", "", "The results folder", [](auto& o) -> std::optional<std::string>& { return o.folder; },
               false)
+          .Doc("the results folder (relative to the experiment file; unset: `results/<name>` under the current "
+               "folder); `--out` overrides")
           .Boolean("plot", "", "The convergence plot", [](auto& o) -> bool& { return o.plot; })
-          .Boolean("report", "", "report.md", [](auto& o) -> bool& { return o.report; });
+          .Doc("the convergence plot (needs gnuplot)")
+          .Boolean("report", "", "report.md", [](auto& o) -> bool& { return o.report; })
+          .Doc("`report.md`");
   return s;
 }
 
