@@ -1,11 +1,13 @@
-// `quijibo optimize`: a target and an initial map in, an optimized map, log and summary out. The
-// options are OptimizeOptions' schema entries (optim/optimizer.h), which own every default and range.
+// `quijibo optimize`: a target and an initial map in, an optimized map, log and summary out, through
+// the optimize stage (experiments/pipeline/optimize.h) as `quijibo run`. The options are
+// OptimizeOptions' schema entries (optim/optimizer.h), which own every default and range.
 #include <cstdio>
 #include <filesystem>
 
 #include "experiments/bind.h"
 #include "experiments/cli.h"
 #include "mesh/sdf_command.h"
+#include "experiments/pipeline/optimize.h"
 #include "optim/optimizer.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
@@ -54,34 +56,16 @@ void AddOptimizeCommand(CLI::App& app) {
     } else {
       o.schedule = o.ScheduleFromNotation(a->schedule);
     }
-    o.out_dir = a->out_dir;
-    o.resume = a->resume;
     const ScalarGrid sdf = LoadTarget(a->target, a->target_resolution);
-    // The initial map: given, or on resume the one the run started from.
-    const std::string initial = a->out_dir + "/initial_map.json";
-    RationalMap map;
-    if (a->resume) {
-      map = ReadMap(initial);
-      mesh::CheckSameFrame(map.frame, initial, a->target);
-    } else {
-      if (a->map_path.empty()) throw Error("--map is required (unless --resume)");
-      map = ReadMap(a->map_path);
-      mesh::CheckSameFrame(map.frame, a->map_path, a->target);
-      std::filesystem::create_directories(a->out_dir);
-      WriteMap(initial, map);
-    }
-    const optim::OptimizeSummary s = optim::Optimize(sdf, map, o);
-    map.provenance["optimized"] = {{"schedule", o.schedule.notation()}, {"evaluator", o.evaluator},
-                                   {"precision", PrecisionName(o.precision)}, {"backend", o.backend},
-                                   {"absolute_energy", s.absolute_end}, {"best_pass", s.best_pass},
-                                   {"complete", s.complete}};
-    if (!s.complete) {
-      std::fprintf(stderr, "%s", s.Report().c_str());
-      throw Error("interrupted; checkpoint written to " + a->out_dir +
-                  "/checkpoint.json; continue with the same command and --resume");
-    }
-    WriteMap(a->out_dir + "/map.json", map);
-    std::fprintf(stderr, "%s", s.Report().c_str());
+    // The initial map: given, or on resume the one the run started from (the stage reads it again).
+    if (!a->resume && a->map_path.empty()) throw Error("--map is required (unless --resume)");
+    const std::string initial_path = a->resume ? a->out_dir + "/initial_map.json" : a->map_path;
+    const RationalMap initial = ReadMap(initial_path);
+    mesh::CheckSameFrame(initial.frame, initial_path, a->target);
+    pipeline::OptimizeStageOptions stage;
+    stage.optimizer = o;
+    const pipeline::OptimizeStageResult r = pipeline::OptimizeStage(sdf, initial, stage, a->out_dir, a->resume);
+    std::fprintf(stderr, "%s", r.summary.Report().c_str());
     std::fprintf(stderr, "quijibo: optimized map in %s/map.json, log in %s/log.jsonl, summary in %s/summary.json\n",
                  a->out_dir.c_str(), a->out_dir.c_str(), a->out_dir.c_str());
   });
