@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "experiments/cli.h"
+#include "experiments/pipeline/energy.h"
 #include "quijibo/child_process.h"
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
@@ -63,12 +64,12 @@ void RunCase(const CaseSpec& s) {
   o.seed = s.seed + std::uint64_t(s.roots);
   RationalMap map = RandomMap(o);
   map.ln_C = -MedianLogModulus(map, grid);
-  EvaluatorChoice choice;
+  pipeline::EnergyStageOptions choice;
   choice.evaluator = s.evaluator;
   choice.precision = ParsePrecision(s.precision);
   choice.storage = ParseStorage(s.storage);
   choice.repeats = s.repeats;
-  const json r = EvaluateEnergy(map, grid, EnergyOptions{}, choice);
+  const json r = pipeline::EvaluateEnergy(map, grid, choice);
   WriteOutput("", r.dump() + "\n");
 }
 

@@ -1,5 +1,7 @@
 #include "experiments/bind.h"
 
+#include "quijibo/frame.h"
+
 namespace quijibo::cli {
 
 std::string DefaultText(const nlohmann::json& v) {
@@ -9,9 +11,8 @@ std::string DefaultText(const nlohmann::json& v) {
   return s;
 }
 
-CLI::Validator RangeValidator(pipeline::SettingType type, double lo, double hi, bool open_lo, bool open_hi,
+CLI::Validator RangeValidator(SettingType type, double lo, double hi, bool open_lo, bool open_hi,
                               const std::vector<int>&) {
-  using pipeline::SettingType;
   const SettingType element = type == SettingType::kNumbers ? SettingType::kNumber : type;
   return CLI::Validator(
       [=](std::string& text) -> std::string {
@@ -26,9 +27,16 @@ CLI::Validator RangeValidator(pipeline::SettingType type, double lo, double hi, 
         } catch (const std::exception&) {
           return "expected a number, found \"" + text + "\"";
         }
-        return pipeline::CheckValue(v, element, lo, hi, open_lo, open_hi, {}, {});
+        return CheckValue(v, element, lo, hi, open_lo, open_hi, {}, {});
       },
-      pipeline::DescribeRange(element, lo, hi, open_lo, open_hi));
+      DescribeRange(element, lo, hi, open_lo, open_hi));
+}
+
+CLI::Option* AddTargetResolution(CLI::App* c, int& value, const std::string& flag, const std::string& help) {
+  const ValueRange& r = kTargetResolutionRange;
+  return c->add_option(flag, value, help)
+      ->capture_default_str()
+      ->check(RangeValidator(SettingType::kInteger, r.lo, r.hi, r.open_lo, r.open_hi, {}));
 }
 
 }  // namespace quijibo::cli

@@ -1,4 +1,4 @@
-// Command-line bindings of a stage's settings (experiments/pipeline/settings.h): each setting
+// Command-line bindings of a stage's settings (quijibo/settings.h): each setting
 // with a flag becomes a CLI11 option on the same Options field, its default shown from the struct
 // (the same value `quijibo run` fills in) and its range checked with the same message.
 #pragma once
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/pipeline/settings.h"
+#include "quijibo/settings.h"
 
 namespace quijibo::cli {
 
@@ -16,15 +16,18 @@ namespace quijibo::cli {
 std::string DefaultText(const nlohmann::json& value);
 
 // A CLI11 validator of a setting's range ("[8, 1024]" in --help).
-CLI::Validator RangeValidator(pipeline::SettingType type, double lo, double hi, bool open_lo, bool open_hi,
+CLI::Validator RangeValidator(SettingType type, double lo, double hi, bool open_lo, bool open_hi,
                               const std::vector<int>& sizes);
+
+// A target grid resolution option (kTargetResolutionRange, quijibo/frame.h) on `value`, whose
+// initializer is the default shown: every command's target grid takes the experiment's range.
+CLI::Option* AddTargetResolution(CLI::App* c, int& value, const std::string& flag, const std::string& help);
 
 // Binds the settings of `o` that have a flag (only those in `keys`, when given) to options of `c`.
 // The first setting with a flag wins when several (of different kinds) share it.
 template <class O>
 void BindSettings(CLI::App* c, O& o, const std::vector<std::string>& keys = {}) {
-  using pipeline::SettingType;
-  for (const pipeline::Setting<O>& s : O::Settings().settings()) {
+  for (const Setting<O>& s : O::Settings().settings()) {
     if (s.flag.empty()) continue;
     if (!keys.empty() && std::find(keys.begin(), keys.end(), s.key) == keys.end()) continue;
     bool taken = false;
@@ -65,7 +68,7 @@ void BindSettings(CLI::App* c, O& o, const std::vector<std::string>& keys = {}) 
         break;
     }
     if (s.type == SettingType::kInteger || s.type == SettingType::kNumber || s.type == SettingType::kNumbers)
-      if (!pipeline::DescribeRange(s.type, s.lo, s.hi, s.open_lo, s.open_hi).empty() || !s.sizes.empty())
+      if (!DescribeRange(s.type, s.lo, s.hi, s.open_lo, s.open_hi).empty() || !s.sizes.empty())
         opt->check(RangeValidator(s.type, s.lo, s.hi, s.open_lo, s.open_hi, s.sizes));
     nlohmann::json def = s.get(o);
     if (def.is_null() && s.fallback) def = s.fallback(o);

@@ -28,6 +28,8 @@ void AddJuliaCommands(CLI::App& app);   // mesh, picture, bench mesh (after AddB
 void AddShapeCommands(CLI::App& app);  // fidelity, bench shapes (after AddBenchCommand)
 void AddBenchBandCommand(CLI::App& app);  // bench band (after AddBenchCommand)
 void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/run_cmd.cpp)
+// Every subcommand above, in this order, and `settings` (experiments/commands.cpp).
+void AddCommands(CLI::App& app);
 
 // `quijibo mesh` with another mesher (quijibo-mpi, docs/mpi.md; pipeline::Mesher).
 void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher);
@@ -41,22 +43,6 @@ void AddMesherOptions(CLI::App* command, mesh::MeshingOptions& options);
 // "torus:major=1,minor=0.3") sampled on the default target box (frame.h, TargetGridFrame)
 // at `resolution`.
 ScalarGrid LoadTarget(const std::string& spec, int resolution);
-
-// Which evaluator, in which precision, on which variables.
-struct EvaluatorChoice {
-  std::string evaluator = "loglinear";  // "loglinear" or "cached"
-  Precision precision = Precision::kDouble;
-  LogLinearOptions::Storage storage = LogLinearOptions::Storage::kAuto;
-  EnergyMode mode = EnergyMode::kFull;
-  bool gradient = true;
-  int repeats = 1;
-};
-
-// Evaluates psi (and its gradient) of `map` on `grid` `repeats` times; returns a JSON report:
-// energy (number and exact decimal string), gradient (numbers, named, and exact strings),
-// cell counts, seconds of each evaluation and their median, set-up seconds, storage used.
-nlohmann::json EvaluateEnergy(const RationalMap& map, const EnergyGrid& grid,
-                              const EnergyOptions& options, const EvaluatorChoice& choice);
 
 // Writes text to path atomically, or to stdout when path is empty or "-".
 void WriteOutput(const std::string& path, const std::string& text);

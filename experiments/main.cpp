@@ -32,18 +32,7 @@ int main(int argc, char** argv) {
   bool quiet = false;
   app.add_flag("-q,--quiet", quiet, "No progress on stderr");
   app.parse_complete_callback([&] { quijibo::Progress::globally_quiet() = quiet; });
-  quijibo::cli::AddEnergyCommand(app);
-  quijibo::cli::AddMapCommand(app);
-  quijibo::cli::AddTargetCommand(app);
-  quijibo::cli::AddBenchCommand(app);
-  quijibo::cli::AddOptimizeCommand(app);
-  quijibo::cli::AddPlotCommand(app);
-  quijibo::cli::AddModuleCommands(app);
-  quijibo::cli::AddModulusCommands(app);
-  quijibo::cli::AddJuliaCommands(app);
-  quijibo::cli::AddShapeCommands(app);
-  quijibo::cli::AddBenchBandCommand(app);
-  quijibo::cli::AddRunCommand(app);
+  quijibo::cli::AddCommands(app);
   AddQuietEverywhere(app, quiet);
   try {
     app.parse(argc, argv);

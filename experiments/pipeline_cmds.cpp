@@ -36,7 +36,7 @@ void AddModuleCommands(CLI::App& app) {
   sdf->add_option("mesh", so->input, "Input mesh")->required();
   sdf->add_option("-o,--out", so->output, "Output .qgrid (the frame goes to <name>.frame.json)")->required();
   sdf->add_option("--vdb", so->vdb_output, "Also write the field as an OpenVDB level set");
-  sdf->add_option("-r,--resolution", so->resolution, "Cells per axis")->capture_default_str()->check(CLI::Range(4, 2048));
+  AddTargetResolution(sdf, so->resolution, "-r,--resolution", "Cells per axis");
   sdf->add_option("--padding", so->padding, "Normalization padding")->capture_default_str();
   sdf->add_option("--fractal-radius", so->fractal_radius, "Fractal frame scale")->capture_default_str();
   sdf->add_option_function<std::string>(
@@ -94,7 +94,7 @@ void AddModuleCommands(CLI::App& app) {
   // bench stages: the monopole stage's parts, timed on real meshes.
   struct BenchArgs {
     std::vector<std::string> meshes{"data/bunny.obj", "data/tooth.obj"};
-    int resolution = 97, repeats = 3;
+    int resolution = kDefaultTargetResolution, repeats = 3;
     std::string fit_target =
         monopole::MonopoleOptions{}.target == monopole::MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
     std::string out_md, out_json;
@@ -105,7 +105,7 @@ void AddModuleCommands(CLI::App& app) {
       "stages", "Seconds of each part of the initial guess (mesh read, SDF, BEM, shell, P on the shell, "
                 "candidates, greedy fit, ln C scan) per mesh, median of repeats, and the process's peak memory");
   st->add_option("meshes", b->meshes, "Meshes")->capture_default_str();
-  st->add_option("-r,--resolution", b->resolution, "Target grid")->capture_default_str()->check(CLI::Range(8, 1024));
+  AddTargetResolution(st, b->resolution, "-r,--resolution", "Target grid");
   st->add_option("--repeats", b->repeats, "Runs per mesh (the median is reported)")->capture_default_str()->check(CLI::Range(1, 100));
   st->add_option("--fit-target", b->fit_target, "reference (1 - P) or potential (P)")
       ->capture_default_str()->check(CLI::IsMember({"reference", "potential"}));

@@ -129,7 +129,7 @@ void AddShapeCommands(CLI::App& app) {
     std::string suite, out = "results/shapes", schedule = "experiments/schedules/demo.json", markdown, images,
                      initializer = "log-kernel", json_out, target_box = "unit";
     std::vector<std::string> meshes, only;
-    int resolution = 97, mesh_resolution = 128;
+    int resolution = kDefaultTargetResolution, mesh_resolution = 128;
     bool initial_only = false, report_only = false;
     mesh::FidelityOptions o;
   };
@@ -147,7 +147,7 @@ void AddShapeCommands(CLI::App& app) {
       ->capture_default_str()->check(CLI::IsMember({"log-kernel", "monopoles"}));
   s->add_option("--target-box", b->target_box, "unit or reference (quijibo/frame.h)")
       ->capture_default_str()->check(CLI::IsMember({"unit", "reference"}));
-  s->add_option("-r,--resolution", b->resolution, "Target grid")->capture_default_str()->check(CLI::Range(8, 1024));
+  AddTargetResolution(s, b->resolution, "-r,--resolution", "Target grid");
   s->add_option("--mesh-resolution", b->mesh_resolution, "Meshing lattice")->capture_default_str()->check(CLI::Range(8, 4096));
   s->add_option("-o,--out", b->out, "Results folder (one run per shape)")->capture_default_str();
   s->add_option("--markdown", b->markdown, "Also write the table and picture sheet here");

@@ -289,7 +289,8 @@ std::string MeshingOptions::validate() const {
     if (!std::isfinite(min_corner[a]) || !std::isfinite(max_corner[a])) return "box corners must be finite";
     if (!(max_corner[a] > min_corner[a])) return "box: max corner must exceed min corner on every axis";
   }
-  if (resolution < 2 || resolution > 65536) return "resolution must be in [2, 65536]";
+  if (auto why = CheckRange("resolution", SettingType::kInteger, resolution, kResolutionRange); !why.empty())
+    return why;
   if (bisection_steps < 1 || bisection_steps > 60) return "bisection steps must be in [1, 60]";
   if (!(bisection_tolerance >= 0) || !std::isfinite(bisection_tolerance)) return "bisection tolerance must be finite and >= 0";
   if (!pow2(block_cells)) return "block cells must be a power of 2";

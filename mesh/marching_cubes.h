@@ -15,6 +15,7 @@
 
 #include "mesh/triangle_mesh.h"
 #include "quijibo/grid.h"
+#include "quijibo/settings.h"
 
 namespace quijibo::mesh {
 
@@ -34,6 +35,7 @@ struct MeshingOptions {
   Vec3 min_corner{-2.0, -2.0, -2.0};  // the box meshed (fractal frame)
   Vec3 max_corner{2.0, 2.0, 2.0};
   int resolution = 256;               // cells along the longest side of the box
+  static constexpr ValueRange kResolutionRange{2, 65536};
   int bisection_steps = 6;            // reference: 6 steps ...
   double bisection_tolerance = 1e-8;  // ... or |f - iso| below this
   bool sparse = true;                 // coarse-to-fine block search; false evaluates every node

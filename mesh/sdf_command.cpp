@@ -17,7 +17,8 @@ std::string SdfCommandOptions::validate() const {
   if (output.empty()) return "an output .qgrid path is required";
   if (!HasExtension(output, ".qgrid")) return output + ": the output must end in .qgrid (the grid format written)";
   if (!vdb_output.empty() && !HasExtension(vdb_output, ".vdb")) return vdb_output + ": --vdb must end in .vdb";
-  if (resolution < 2 || resolution > 2048) return "resolution must be in [2, 2048]";
+  if (auto why = CheckRange("resolution", SettingType::kInteger, resolution, kTargetResolutionRange); !why.empty())
+    return why;
   if (!(padding >= 0.0 && padding < 0.5)) return "padding must be in [0, 0.5)";
   if (!(fractal_radius > 0.0) || !std::isfinite(fractal_radius))
     return "fractal radius must be a positive finite number";

@@ -13,7 +13,7 @@ struct SdfCommandOptions {
   std::string input;          // mesh file (.obj, .ply, .stl, .off)
   std::string output;         // the .qgrid to write
   std::string vdb_output;     // optional .vdb of the same field ("" = none)
-  int resolution = 97;        // n: the grid has n^3 cells (TargetGridFrame)
+  int resolution = kDefaultTargetResolution;  // n: the grid has n^3 cells (TargetGridFrame)
   double padding = FractalFrame{}.padding;  // normalization padding, in [0, 0.5)
   double fractal_radius = FractalFrame{}.fractal_radius;
   TargetBox box = TargetBox::kUnitCube;  // the grid's box (quijibo/frame.h)

@@ -11,7 +11,9 @@ namespace quijibo::monopole {
 
 std::string InitialGuessOptions::validate() const {
   if (!(amplitude > 0) || !std::isfinite(amplitude)) return "amplitude must be a positive number";
-  if (scan_resolution < 4 || scan_resolution > 512) return "scan resolution must be in [4, 512]";
+  if (auto why = CheckRange("scan_resolution", SettingType::kInteger, scan_resolution, kScanResolutionRange);
+      !why.empty())
+    return why;
   if (!(alpha > 0)) return "alpha must be > 0";
   return {};
 }

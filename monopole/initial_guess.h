@@ -16,6 +16,7 @@
 
 #include "monopole/monopole_fit.h"
 #include "quijibo/rational_map.h"
+#include "quijibo/settings.h"
 
 namespace quijibo::monopole {
 
@@ -27,6 +28,7 @@ struct InitialGuessOptions {
   double amplitude = 50.0;
   bool leading_zero_roots = true;  // reference: on
   int scan_resolution = 25;        // grid of the ln C scan (reference: 25)
+  static constexpr ValueRange kScanResolutionRange{4, 512};
   double alpha = 10.0;
   std::string validate() const;
 };

@@ -60,118 +60,129 @@ LogLinearOptions OptimizeOptions::loglinear() const {
   return l;
 }
 
+const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
+  using O = OptimizeOptions;
+  static const Schema<O> s =
+      Schema<O>()
+          .Integer(
+              "max_iterations/V", "--max-v", "Iteration cap of V passes (notation form)",
+              [](auto& o) -> int& { return o.max_iterations.V; }, kMaxIterationsRange)
+          .Doc("cap of V passes in the notation form (a JSON schedule's passes without a cap get the same "
+               "default, or its own `\"defaults\"`)")
+          .Integer(
+              "max_iterations/F", "--max-f", "Iteration cap of F passes (notation form)",
+              [](auto& o) -> int& { return o.max_iterations.F; }, kMaxIterationsRange)
+          .Doc("the same for F passes")
+          .Integer(
+              "max_iterations/R", "--max-r", "Iteration cap of R passes (notation form)",
+              [](auto& o) -> int& { return o.max_iterations.R; }, kMaxIterationsRange)
+          .Doc("the same for R passes")
+          .Number(
+              "tolerance", "--tolerance",
+              "Projected-gradient tolerance (infinity norm) of every pass (notation form)",
+              [](auto& o) -> double& { return o.tolerance; }, kToleranceRange)
+          .Choice("backend", "--backend", "lbfgspp (bound-constrained L-BFGS-B) or ceres (L-BFGS on x = y^2)",
+                  [](auto& o) -> std::string& { return o.backend; }, kBackendNames)
+          .Choice("evaluator", "-e,--evaluator",
+                  "auto (band in double, else cached), band (log-linear, narrow band), dense (log-linear, every "
+                  "cell; also: loglinear) or cached (the paper's)",
+                  [](auto& o) -> std::string& { return o.evaluator; }, kEvaluatorNames)
+          .Doc("`auto`: the narrow band in double, `cached` in other precisions; `band`: the log-linear evaluator "
+               "on its narrow band (same ψ and gradient as dense, bit for bit; docs/architecture.md); `dense` "
+               "(older name `loglinear`): log-linear on every cell (double only); `cached`: the paper's evaluator")
+          .Enum(
+              "precision", "-p,--precision", "float, double, long-double, float128 (cached)", kPrecisionNames,
+              [](const O& o) { return PrecisionName(o.precision); },
+              [](O& o, const std::string& v) { o.precision = ParsePrecision(v); })
+          .Doc("evaluator precision (`cached` for anything but double)")
+          .Enum(
+              "weights", "-w,--weights", "layer (reference), inverse (paper) or balanced (quijibo/target.h)",
+              kWeightNames, [](const O& o) { return WeightFieldName(o.weights); },
+              [](O& o, const std::string& v) { o.weights = ParseWeightField(v); })
+          .Doc("weight field: layer weights where a misclassified cell costs the same inside and outside (as the "
+               "IoU counts it; `balanced`), the reference code's layer weights (inside and outside each normalized "
+               "to 0.5; `layer`), or the paper's 1/phi (`inverse`) ([fidelity.md](fidelity.md))")
+          .Enum(
+              "level_weights", "--level-weights", "sample or recompute", kLevelWeightNames,
+              [](const O& o) { return LevelWeightsName(o.level_weights); },
+              [](O& o, const std::string& v) { o.level_weights = ParseLevelWeights(v); })
+          .Doc("coarse-level weights: the finest level's sampled (the reference), or recomputed on the level")
+          .Enum(
+              "level_start", "--level-start",
+              "best: each level after the first starts from the map with the lowest absolute energy so far; "
+              "last: from the last pass's map (the paper, the reference code)",
+              kLevelStartNames, [](const O& o) { return LevelStartName(o.level_start); },
+              [](O& o, const std::string& v) { o.level_start = ParseLevelStart(v); })
+          .Doc("where each level after the first starts: the last pass's map (the paper and reference), or the "
+               "map with the lowest absolute energy so far ([fidelity.md](fidelity.md) §5)")
+          .Number(
+              "min_level_fidelity", "--min-level-fidelity",
+              "A level runs at the smallest resolution (up to the finest) whose grid represents the target with "
+              "at least this IoU (0: the schedule as written)",
+              [](auto& o) -> double& { return o.min_level_fidelity; }, 0, 1)
+          .Doc("each level runs at the smallest resolution (from its scheduled one up to the finest) whose grid "
+               "represents the target with at least this IoU; 0: the schedule as written, the paper's "
+               "([fidelity.md](fidelity.md) §6)")
+          .Number(
+              "alpha", "--alpha", "Sharpness of tanh", [](auto& o) -> double& { return o.energy.alpha; },
+              EnergyOptions::kAlphaRange)
+          .Integer(
+              "memory", "--memory", "L-BFGS correction pairs", [](auto& o) -> int& { return o.memory; }, 1, 100)
+          .Enum(
+              "storage", "--storage", "loglinear log-distance storage: auto, double, float, on-the-fly", kStorageNames,
+              [](const O& o) { return StorageName(o.storage); },
+              [](O& o, const std::string& v) { o.storage = ParseStorage(v); })
+          .Doc("log-linear log-distance storage; `on-the-fly` (what `auto` picks when the matrix exceeds the "
+               "budget) keeps the rows of the cells near the surface in a cache of up to half the budget, and the "
+               "band anchors on blocks")
+          .Number(
+              "memory_budget_gb", "--memory-budget",
+              "GB the finest level's log-distance matrix may take with storage auto (else on the fly, ~5x slower)",
+              [](auto& o) -> double& { return o.memory_budget_gb; }, 0, 1e6)
+          .Integer(
+              "checkpoint_every", "--checkpoint-every", "Iterations between checkpoints",
+              [](auto& o) -> int& { return o.checkpoint_every; }, 1, 1000000)
+          .Doc("iterations between checkpoints (and L-BFGS memory restarts)")
+          .Integer(
+              "absolute_every", "--absolute-every", "Iterations between absolute energies in the log",
+              [](auto& o) -> int& { return o.absolute_every; }, 1, 1000000);
+  return s;
+}
+
+namespace {
+// The log-linear evaluators (band, dense) run in double only.
+bool PrecisionMismatch(const OptimizeOptions& o) {
+  return ResolveEvaluator(o.evaluator, o.precision) != "cached" && o.precision != Precision::kDouble;
+}
+}  // namespace
+
 std::string OptimizeOptions::Validate() const {
   if (auto why = schedule.validate(); !why.empty()) return "schedule: " + why;
-  if (std::find(kEvaluatorNames.begin(), kEvaluatorNames.end(), evaluator) == kEvaluatorNames.end())
-    return "evaluator must be auto, band, dense (loglinear) or cached, found \"" + evaluator + "\"";
-  if (ResolveEvaluator(evaluator, precision) != "cached" && precision != Precision::kDouble)
-    return "the loglinear evaluator (band or dense) runs in double only";
-  if (std::find(kBackendNames.begin(), kBackendNames.end(), backend) == kBackendNames.end())
-    return "unknown back end \"" + backend + "\" (available: lbfgspp, ceres)";
+  if (auto why = Settings().Check(*this); !why.empty()) return why;
+  if (PrecisionMismatch(*this)) return "the loglinear evaluator (band or dense) runs in double only";
   if (backend == "ceres" && precision != Precision::kDouble) return "the ceres back end runs in double only";
-  const std::pair<SettingRange, double> values[] = {
-      {kAlphaRange, energy.alpha},       {kMemoryRange, double(memory)},
-      {kMemoryBudgetRange, memory_budget_gb}, {kCheckpointEveryRange, double(checkpoint_every)},
-      {kAbsoluteEveryRange, double(absolute_every)}, {kToleranceRange, tolerance},
-      {kMinLevelFidelityRange, min_level_fidelity}};
-  for (const auto& [range, value] : values)
-    if (auto why = range.Check(value); !why.empty()) return why;
-  const std::pair<const char*, int> caps[] = {{"V", max_iterations.V}, {"F", max_iterations.F}, {"R", max_iterations.R}};
-  for (const auto& [kind, cap] : caps)
-    if (!kMaxIterationsRange.contains(cap))
-      return std::string("max_iterations.") + kind + " must be in " + kMaxIterationsRange.interval() + ", found " +
-             std::to_string(cap);
   if (auto why = energy.validate(); !why.empty()) return why;
   if (auto why = loglinear().validate(); !why.empty()) return why;
   return {};
 }
 
 json OptimizeOptions::ToJson() const {
-  return {{"backend", backend},
-          {"evaluator", evaluator},
-          {"precision", PrecisionName(precision)},
-          {"weights", WeightFieldName(weights)},
-          {"level_weights", LevelWeightsName(level_weights)},
-          {"level_start", LevelStartName(level_start)},
-          {"min_level_fidelity", min_level_fidelity},
-          {"storage", StorageName(storage)},
-          {"alpha", energy.alpha},
-          {"memory", memory},
-          {"memory_budget_gb", memory_budget_gb},
-          {"checkpoint_every", checkpoint_every},
-          {"absolute_every", absolute_every},
-          {"tolerance", tolerance},
-          {"max_iterations", {{"V", max_iterations.V}, {"F", max_iterations.F}, {"R", max_iterations.R}}},
-          {"schedule", schedule.ToJson()}};
+  json j = json::object();
+  Settings().Write(*this, j);
+  j["schedule"] = schedule.ToJson();
+  return j;
 }
-
-namespace {
-
-// One of `choices` at `p`, or `fallback` when missing.
-std::string Choice(const JsonReader& r, const std::string& p, const std::string& fallback,
-                   const std::vector<std::string>& choices) {
-  const std::string v = r.string_or(p, fallback);
-  if (std::find(choices.begin(), choices.end(), v) == choices.end()) {
-    std::string list;
-    for (const auto& c : choices) list += (list.empty() ? "" : ", ") + ("\"" + c + "\"");
-    r.fail(p, "expected one of " + list + ", found \"" + v + "\"");
-  }
-  return v;
-}
-
-// A number in `range` at `p` (an integer for integer ranges; 5.0 counts as 5), or `fallback`.
-double InRange(const JsonReader& r, const std::string& p, const SettingRange& range, double fallback) {
-  if (!r.has(p)) return fallback;
-  double v;
-  if (range.integer) {
-    const json& j = r.at(p);
-    if (j.is_number_float() && std::isfinite(j.get<double>()) && j.get<double>() == std::floor(j.get<double>()) &&
-        std::abs(j.get<double>()) < 9e15)
-      v = j.get<double>();
-    else
-      v = double(r.integer(p));
-  } else {
-    v = r.number(p);
-  }
-  if (!range.contains(v)) r.fail(p, range.Expected(v));
-  return v;
-}
-
-}  // namespace
 
 OptimizeOptions OptimizeOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
                                           const std::vector<std::string>& extra_keys) {
   if (!r.at(p).is_object()) r.fail(p, "expected an object, found " + JsonReader::describe(r.at(p)));
   std::vector<std::string> keys = extra_keys;
-  keys.insert(keys.end(), {"schedule", "backend", "evaluator", "precision", "weights", "level_weights", "level_start",
-                           "min_level_fidelity", "alpha", "memory", "tolerance", "max_iterations", "checkpoint_every", "absolute_every",
-                           "storage", "memory_budget_gb"});
-  r.allow_keys(p, keys);
+  keys.push_back("schedule");
   OptimizeOptions o;
-  o.backend = Choice(r, p + "/backend", o.backend, kBackendNames);
-  o.evaluator = Choice(r, p + "/evaluator", o.evaluator, kEvaluatorNames);
-  const std::string precision = Choice(r, p + "/precision", PrecisionName(o.precision), kPrecisionNames);
-  o.precision = ParsePrecision(precision);
-  if (ResolveEvaluator(o.evaluator, o.precision) != "cached" && o.precision != Precision::kDouble)
+  Settings().Read(r, p, base, o, keys);
+  if (PrecisionMismatch(o))
     r.fail(p + "/precision", "the loglinear evaluator runs in double only; use \"evaluator\": \"cached\" for \"" +
-                                 precision + "\"");
-  o.weights = ParseWeightField(Choice(r, p + "/weights", WeightFieldName(o.weights), kWeightNames));
-  o.level_weights =
-      ParseLevelWeights(Choice(r, p + "/level_weights", LevelWeightsName(o.level_weights), kLevelWeightNames));
-  o.level_start = ParseLevelStart(Choice(r, p + "/level_start", LevelStartName(o.level_start), kLevelStartNames));
-  o.min_level_fidelity = InRange(r, p + "/min_level_fidelity", kMinLevelFidelityRange, o.min_level_fidelity);
-  o.storage = ParseStorage(Choice(r, p + "/storage", StorageName(o.storage), kStorageNames));
-  o.energy.alpha = InRange(r, p + "/alpha", kAlphaRange, o.energy.alpha);
-  o.memory = int(InRange(r, p + "/memory", kMemoryRange, o.memory));
-  o.memory_budget_gb = InRange(r, p + "/memory_budget_gb", kMemoryBudgetRange, o.memory_budget_gb);
-  o.checkpoint_every = int(InRange(r, p + "/checkpoint_every", kCheckpointEveryRange, o.checkpoint_every));
-  o.absolute_every = int(InRange(r, p + "/absolute_every", kAbsoluteEveryRange, o.absolute_every));
-  o.tolerance = InRange(r, p + "/tolerance", kToleranceRange, o.tolerance);
-  if (r.has(p + "/max_iterations")) r.allow_keys(p + "/max_iterations", {"V", "F", "R"});
-  const std::pair<const char*, int*> caps[] = {
-      {"V", &o.max_iterations.V}, {"F", &o.max_iterations.F}, {"R", &o.max_iterations.R}};
-  for (const auto& [kind, cap] : caps)
-    *cap = int(InRange(r, p + "/max_iterations/" + kind, kMaxIterationsRange, *cap));
+                                 PrecisionName(o.precision) + "\"");
   // The schedule: notation, a JSON object, or a .json file holding one.
   const std::string sp = p + "/schedule";
   if (!r.has(sp)) {
@@ -182,8 +193,7 @@ OptimizeOptions OptimizeOptions::FromJson(const JsonReader& r, const std::string
       const std::string s = node.get<std::string>();
       if (s.find_first_not_of(" \t") == std::string::npos) r.fail(sp, "expected a schedule, found an empty string");
       if (s.ends_with(".json")) {
-        const fs::path f(s);
-        const std::string file = (f.is_relative() ? (base / f).lexically_normal() : f).string();
+        const std::string file = ResolvePath(base, s);
         if (!fs::is_regular_file(file)) r.fail(sp, "no such schedule file: " + file);
         const json doc = ParseJson(ReadFile(file), file);
         o.schedule = Schedule::FromJson(JsonReader(doc, file), "");

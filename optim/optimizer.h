@@ -29,11 +29,11 @@
 
 #include "optim/iteration_callback.h"
 #include "optim/schedule.h"
-#include "optim/setting_range.h"
 #include "quijibo/json_reader.h"
 #include "quijibo/energy.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/real.h"
+#include "quijibo/settings.h"
 #include "quijibo/target.h"
 
 namespace quijibo::optim {
@@ -48,9 +48,10 @@ inline const std::vector<std::string> kEvaluatorNames = {"auto", "band", "dense"
 // The evaluator a run uses: "band", "dense" or "cached". Throws on an unknown name.
 std::string ResolveEvaluator(const std::string& name, Precision precision);
 
-// Every optimizer setting, once: its default here, its range in the table below, its JSON key in
-// ToJson/FromJson (docs/experiments.md "optimizer"); `quijibo optimize` binds its options to these
-// fields and `quijibo run` reads the experiment's "optimizer" object with FromJson.
+// Every optimizer setting, once: its default here, its JSON key, flag, help and range in Settings()
+// (quijibo/settings.h); FromJson, ToJson and Validate read those entries, `quijibo optimize` binds
+// them as its options and `quijibo run` and Python read the experiment's "optimizer" object with
+// FromJson. The schedule is read by hand (a notation, an object or a file).
 struct OptimizeOptions {
   inline static const std::string kDefaultSchedule = "25(VFRF)50(VFRF)97(VF)";
   // Passes the schedule's notation leaves open get these (kDefaultMaxIterations, kDefaultTolerance;
@@ -96,14 +97,6 @@ struct OptimizeOptions {
   // observers; kAbort stops the run as an interrupt does. Not owned.
   std::vector<IterationCallback*> callbacks;
 
-  // The ranges of the numeric settings (max_iterations: kMaxIterationsRange in schedule.h).
-  static constexpr SettingRange kAlphaRange{"alpha", 0, 1e6, false, true};
-  static constexpr SettingRange kMemoryRange{"memory", 1, 100, true};
-  static constexpr SettingRange kMemoryBudgetRange{"memory_budget_gb", 0, 1e6};
-  static constexpr SettingRange kCheckpointEveryRange{"checkpoint_every", 1, 1000000, true};
-  static constexpr SettingRange kAbsoluteEveryRange{"absolute_every", 1, 1000000, true};
-  static constexpr SettingRange kToleranceRange{"tolerance", 0, 1e6};
-  static constexpr SettingRange kMinLevelFidelityRange{"min_level_fidelity", 0, 1};
   // The names each choice accepts, in the order messages list them.
   inline static const std::vector<std::string> kBackendNames = {"lbfgspp", "ceres"};
   inline static const std::vector<std::string> kPrecisionNames = {"float", "double", "long-double", "float128"};
@@ -112,6 +105,7 @@ struct OptimizeOptions {
   inline static const std::vector<std::string> kLevelStartNames = {"best", "last"};
   inline static const std::vector<std::string> kStorageNames = {"auto", "double", "float", "on-the-fly"};
 
+  static const Schema<OptimizeOptions>& Settings();
   // "" or the first problem, naming the setting and its range.
   std::string Validate() const;
   // The per-kind caps and tolerance as the notation's pass defaults (V, F, R).

@@ -28,11 +28,19 @@ PassSpec DefaultPass(PassKind kind) {
   return p;
 }
 
-std::string PassSpec::validate() const {
-  if (auto why = kMaxIterationsRange.Check(max_iterations); !why.empty()) return why;
-  if (!(tolerance >= 0) || !std::isfinite(tolerance)) return "tolerance must be a finite number >= 0";
-  return {};
+const Schema<PassSpec>& PassSpec::Settings() {
+  static const Schema<PassSpec> s =
+      Schema<PassSpec>()
+          .Integer(
+              "max_iterations", "", "Iteration cap of the pass", [](auto& p) -> int& { return p.max_iterations; },
+              kMaxIterationsRange)
+          .Number(
+              "tolerance", "", "Projected-gradient tolerance (infinity norm) of the pass",
+              [](auto& p) -> double& { return p.tolerance; }, kToleranceRange);
+  return s;
 }
+
+std::string PassSpec::validate() const { return Settings().Check(*this); }
 
 Schedule Schedule::Parse(const std::string& text, const PassSpec defaults[3]) {
   Schedule s;
@@ -80,15 +88,7 @@ Schedule Schedule::FromJson(const JsonReader& r, const std::string& ptr) {
   const nlohmann::json& node = r.at(ptr);
   PassSpec defaults[3] = {DefaultPass(PassKind::kVariable), DefaultPass(PassKind::kFull),
                           DefaultPass(PassKind::kReweighted)};
-  auto read_pass = [&](const std::string& p, PassSpec& spec) {
-    r.allow_keys(p, {"kind", "max_iterations", "tolerance"});
-    if (r.has(p + "/max_iterations")) {
-      const long long m = r.integer(p + "/max_iterations");
-      if (!kMaxIterationsRange.contains(double(m))) r.fail(p + "/max_iterations", kMaxIterationsRange.Expected(double(m)));
-      spec.max_iterations = int(m);
-    }
-    if (r.has(p + "/tolerance")) spec.tolerance = r.number_at_least(p + "/tolerance", 0.0);
-  };
+  auto read_pass = [&](const std::string& p, PassSpec& spec) { PassSpec::Settings().Read(r, p, "", spec, {"kind"}); };
   // Notation inside a JSON document: its errors name the document and the key too.
   auto parse = [&](const std::string& p, const std::string& text) {
     try {

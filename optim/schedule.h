@@ -11,12 +11,13 @@
 //    "defaults": {"V": {"max_iterations": 200}, "F": {...}, "R": {...}}}
 #pragma once
 
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include "optim/setting_range.h"
 #include "quijibo/json_reader.h"
+#include "quijibo/settings.h"
 
 namespace quijibo::optim {
 
@@ -29,13 +30,17 @@ int PassKindIndex(PassKind kind);  // V 0, F 1, R 2
 // code's cap; V moves three variables and converges in far fewer iterations.
 inline constexpr int kDefaultMaxIterations[3] = {200, 2000, 2000};  // V, F, R
 inline constexpr double kDefaultTolerance = 1e-5;
-inline constexpr SettingRange kMaxIterationsRange{"max_iterations", 1, 10000000, true};
+inline constexpr ValueRange kMaxIterationsRange{1, 10000000};
+// Unbounded above: a tolerance no gradient meets makes a pass stop at once (tests of stalled passes).
+inline constexpr ValueRange kToleranceRange{0, std::numeric_limits<double>::infinity()};
 
 struct PassSpec {
   PassKind kind = PassKind::kFull;
   int max_iterations = kDefaultMaxIterations[1];
   double tolerance = kDefaultTolerance;  // on the infinity norm of the projected gradient
   std::string validate() const;
+  // max_iterations and tolerance, as a pass or a kind's "defaults" of the JSON form has them.
+  static const Schema<PassSpec>& Settings();
 };
 
 struct LevelSpec {

@@ -6,8 +6,7 @@
 namespace quijibo {
 
 std::string EnergyOptions::validate() const {
-  if (!(alpha > 0) || !std::isfinite(alpha)) return "alpha must be a positive finite number";
-  return {};
+  return CheckRange("alpha", SettingType::kNumber, alpha, kAlphaRange);
 }
 
 std::vector<char> SingularCells(const RationalMap& map, const EnergyGrid& grid,

@@ -21,12 +21,14 @@
 #include <vector>
 
 #include "quijibo/rational_map.h"
+#include "quijibo/settings.h"
 #include "quijibo/target.h"
 
 namespace quijibo {
 
 struct EnergyOptions {
   double alpha = 10.0;  // sharpness of the tanh step (reference code: 10)
+  static constexpr ValueRange kAlphaRange{0, 1e6, true};
   std::string validate() const;
 };
 

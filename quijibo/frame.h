@@ -18,6 +18,7 @@
 #pragma once
 
 #include "quijibo/grid.h"
+#include "quijibo/settings.h"
 
 namespace quijibo {
 
@@ -72,6 +73,11 @@ enum class TargetBox {
 };
 TargetBox ParseTargetBox(const std::string& name);  // "unit" or "reference"
 std::string TargetBoxName(TargetBox box);
+
+// Cells per axis of the target grid: the paper's 97, and the range every command, experiment and
+// the Python module accept (the grid costs n^3 cells; its log-distance matrix n^3 per root).
+inline constexpr int kDefaultTargetResolution = 97;
+inline constexpr ValueRange kTargetResolutionRange{8, 1024};
 
 // The target grid of resolution n in the fractal frame: a cube centred at box_center() (the
 // centre of the mesh's bounding box).

@@ -60,9 +60,32 @@ const Schema<OutputsOptions>& OutputsOptions::Settings() {
           .Path(
               "folder", "", "The results folder", [](auto& o) -> std::optional<std::string>& { return o.folder; },
               false)
+          .Doc("the results folder (relative to the experiment file; unset: `results/<name>` under the current "
+               "folder); `--out` overrides")
           .Boolean("plot", "", "The convergence plot", [](auto& o) -> bool& { return o.plot; })
-          .Boolean("report", "", "report.md", [](auto& o) -> bool& { return o.report; });
+          .Doc("the convergence plot (needs gnuplot)")
+          .Boolean("report", "", "report.md", [](auto& o) -> bool& { return o.report; })
+          .Doc("`report.md`");
   return s;
+}
+
+json DescribeSettings() {
+  ModulusStageOptions modulus;
+  PortalStageOptions portal;
+  return {{"", Top::Settings().Describe()},
+          {"target", TargetOptions::Settings().Describe()},
+          {"initial", InitialGuessStageOptions::Settings().Describe()},
+          {"optimizer", optim::OptimizeOptions::Settings().Describe()},
+          {"optimizer/schedule", optim::PassSpec::Settings().Describe()},
+          {"mesh", MeshStageOptions::Settings().Describe()},
+          {"modulus", ModulusStageOptions::Settings().Describe()},
+          {"modulus/versor", VersorOptions::Settings().Describe()},
+          {"modulus/output", ProductOutputOptions::Settings().Describe(modulus.output)},
+          {"portal", PortalStageOptions::Settings().Describe()},
+          {"portal/output", ProductOutputOptions::Settings().Describe(portal.output)},
+          {"pictures", PicturesOptions::Settings().Describe()},
+          {"outputs", OutputsOptions::Settings().Describe()},
+          {"energy", EnergyStageOptions::Settings().Describe()}};
 }
 
 Experiment Experiment::FromFile(const std::string& path) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/pipeline/energy.h"
 #include "experiments/pipeline/initial.h"
 #include "experiments/pipeline/mesh.h"
 #include "experiments/pipeline/modulus.h"
@@ -55,5 +56,12 @@ struct Experiment {
   // The optimizer run whose map the mesh and pictures use.
   const OptimizeStageOptions& chosen_optimizer() const;
 };
+
+// Every setting of an experiment, by section ("" the top level, "target", "optimizer",
+// "optimizer/schedule" a pass of the JSON schedule form, "modulus/output", ...; "energy" the settings
+// of `quijibo energy`, not a section of the file), as Schema::Describe
+// gives them: what `quijibo settings` prints, docs/experiments.md's tables are generated from and the
+// tests compare the command line's and Python's defaults and ranges with.
+nlohmann::json DescribeSettings();
 
 }  // namespace quijibo::pipeline

@@ -137,7 +137,7 @@ const Schema<O>& O::Settings() {
           .When(Kind({"monopoles"}))
           .Integer(
               "scan_resolution", "--scan-resolution", "monopoles: grid of the ln C scan",
-              [](auto& o) -> int& { return o.guess.scan_resolution; }, 4, 512)
+              [](auto& o) -> int& { return o.guess.scan_resolution; }, monopole::InitialGuessOptions::kScanResolutionRange)
           .When(Kind({"monopoles"}))
           .Integer(
               "png_size", "--png-size", "Pixels per side of start.png (log-kernel) or potential.png (monopoles)",

@@ -45,7 +45,8 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
           .Boolean("enabled", "", "Mesh the Julia set", [](auto& o) -> bool& { return o.enabled; })
           .Integer(
               "resolution", "-r,--resolution", "Cells along the longest side of the box",
-              [](auto& o) -> int& { return o.meshing.resolution; }, 2, 65536)
+              [](auto& o) -> int& { return o.meshing.resolution; }, mesh::MeshingOptions::kResolutionRange)
+          .Doc("marching-cubes cells along the box's longest side (`MeshingOptions`, as `quijibo mesh -r`)")
           .Integer(
               "iterations", "-n,--iterations", "Map applications n (paper: 1 and 4)",
               [](auto& o) -> int& { return o.julia.iterations; }, 1, 1000)
@@ -55,20 +56,29 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
           .Number(
               "iso", "--iso", "Iso value of log|q_n| (reference: 0)", [](auto& o) -> double& { return o.iso; }, -1e6,
               1e6)
+          .Doc("the surface log|q_n| = iso")
           .Numbers(
               "translate", "--translate",
               "Root translation x,y,z[,k] added to every root and sample, in the iteration frame (changes the set "
               "when n > 1; the paper's Fig. 1c: 0,0,1.41 with iteration_frame reference)",
               [](auto& o) -> std::optional<std::vector<double>>& { return o.translate; }, {3, 4}, -1e6, 1e6)
+          .Doc("root translation x, y, z[, k] in the iteration frame (as `quijibo mesh --translate`; changes the set "
+               "when n > 1)")
           .Choice("iteration_frame", "--iteration-frame",
                   "Frame the map is iterated in (and --translate, --box given in): map (as optimized) or reference "
                   "(the reference code's: origin at the box centre, longest side 3)",
                   [](auto& o) -> std::string& { return o.iteration_frame; }, {"map", "reference"})
+          .Doc("the frame the map is iterated in and `translate` is given in: the map's own, or the reference "
+               "code's (origin at the mesh's bounding-box centre, longest side 3), where the paper's translations "
+               "are given ([meshing.md](meshing.md) \"Root translation\")")
           .Number(
               "detail", "--detail",
               "Fractal detail: the width of the band |L| < 1 about the surface, percent of the shape's size; the "
               "one-step set stays (0.25: smooth; 0: as optimized; 2: rough; 8: intricate; docs/meshing.md)",
               [](auto& o) -> double& { return o.detail; }, 0.0, 100.0)
+          .Doc("fractal detail: the band |L| < 1 about the surface made this percent of the shape's size wide; "
+               "the one-step set stays (0.25 smooth, whatever the optimizer left; 0 the map as optimized; 2 rough; "
+               "8 intricate; 16 loses the shape; [meshing.md](meshing.md) \"Detail\")")
           .Choice("frame", "--frame", "Coordinates of the output: user (the input mesh's) or fractal",
                   [](auto& o) -> std::string& { return o.frame; }, {"user", "fractal"})
           .Boolean("vdb", "", "Also write julia.vdb", [](auto& o) -> bool& { return o.vdb; })
@@ -81,8 +91,11 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
               "Iteration kernel in double precision: vector (SIMD, glibc libmvec) or scalar (the reference); other "
               "precisions are scalar",
               [](auto& o) -> std::string& { return o.kernel; }, kJuliaKernelNames)
+          .Doc("iteration kernel in double: SIMD (`quijibo/julia_batch.h`) or the scalar reference; same meshes "
+               "([meshing.md](meshing.md))")
           .String("optimizer", "", "Which optimizer's map to mesh",
-                  [](auto& o) -> std::string& { return o.optimizer; });
+                  [](auto& o) -> std::string& { return o.optimizer; })
+          .Doc("which optimized map to mesh (unset: the first optimizer's)");
   return s;
 }
 

@@ -23,6 +23,7 @@ const Schema<PicturesOptions>& PicturesOptions::Settings() {
           .Integer(
               "slice_iterations", "-n,--iterations", "Map applications n of the set against the target",
               [](auto& o) -> int& { return o.slice_iterations; }, 1, 1000)
+          .Doc("n of the slices against the target")
           .Integer(
               "slice_size", "--size", "Pixels along the longer side of the slice",
               [](auto& o) -> int& { return o.slice.size; }, 16, 8192)
@@ -31,7 +32,8 @@ const Schema<PicturesOptions>& PicturesOptions::Settings() {
               16, 8192)
           .Integer(
               "render_views", "--views", "Views of the render: front, side, top, three-quarter",
-              [](auto& o) -> int& { return o.render.views; }, 1, 4);
+              [](auto& o) -> int& { return o.render.views; }, 1, 4)
+          .Doc("views of `render.png`: front, side, top, three-quarter");
   return s;
 }
 

@@ -35,22 +35,32 @@ const Schema<TargetOptions>& TargetOptions::Settings() {
   static const Schema<TargetOptions> s =
       Schema<TargetOptions>()
           .Path("mesh", "", "A mesh (.obj, .ply, .stl, .off)", [](auto& o) -> std::string& { return o.mesh; })
+          .Doc("`.obj`, `.ply`, `.stl` or `.off`; normalized into the fractal frame (`mesh/normalize.h`), its SDF "
+               "computed (`quijibo sdf`)")
           .When([](const TargetOptions& o) { return !o.mesh.empty(); })
           .Path("qgrid", "", "A signed distance grid from `quijibo sdf` (fractal frame)",
                 [](auto& o) -> std::string& { return o.qgrid; })
+          .Doc("a signed distance grid from `quijibo sdf`/`monopoles` (fractal frame); its `.frame.json` is used "
+               "when present")
           .When([](const TargetOptions& o) { return !o.qgrid.empty(); })
           .String("analytic", "", "An analytic shape: sphere[:radius=R], torus[:major=R,minor=r]",
                   [](auto& o) -> std::string& { return o.analytic; })
+          .Doc("`sphere[:radius=R]`, `torus[:major=R,minor=r]` (QUIJIBO); for `modulus` also `disc`, `hexagram`")
           .When([](const TargetOptions& o) { return !o.analytic.empty(); })
           .Integer(
               "resolution", "-r,--resolution", "Target grid cells per axis",
-              [](auto& o) -> int& { return o.resolution; }, 8, 1024)
+              [](auto& o) -> int& { return o.resolution; }, kTargetResolutionRange)
+          .Doc("cells per axis of the target grid (mesh and analytic targets; the paper: 97; every command's "
+               "target grid takes this default and range)")
           .Number(
               "padding", "--padding", "Normalization padding: the mesh's longest side spans 1 - 2 padding",
               [](auto& o) -> double& { return o.padding; }, 0.0, 0.4999)
+          .Doc("normalization padding: the mesh's longest side spans 1 − 2·padding of the unit cube (mesh targets)")
           .Number(
               "fractal_radius", "--fractal-radius", "Fractal frame scale: w = fractal_radius (p - origin)",
               [](auto& o) -> double& { return o.fractal_radius; }, 0.0, FractalFrame::kMaxFractalRadius, true)
+          .Doc("the fractal frame's scale, w = fractal_radius · (p − origin) (mesh targets); with `frame_scale` "
+               "`\"trap\"` the target stage chooses it instead")
           .Enum(
               "box", "--target-box",
               "unit: the whole unit cube, a margin of `padding` around the shape; reference: the reference code's "
@@ -58,6 +68,9 @@ const Schema<TargetOptions>& TargetOptions::Settings() {
               {"unit", "reference"}, [](const TargetOptions& o) { return TargetBoxName(o.box); },
               [](TargetOptions& o, const std::string& v) { o.box = ParseTargetBox(v); })
           .When([](const TargetOptions& o) { return !o.mesh.empty(); })
+          .Doc("mesh targets: the target grid covers the whole normalized unit cube (a margin of `padding` around "
+               "the shape, the box `mesh` and the pictures use), or the reference code's box (the shape plus one "
+               "cell), where the set can grow unseen beside the shape ([fidelity.md](fidelity.md))")
           .Enum(
               "origin", "--origin",
               "inside: the fractal origin at the point deepest inside the shape, where iterating the map traps "
@@ -68,6 +81,9 @@ const Schema<TargetOptions>& TargetOptions::Settings() {
               },
               [](TargetOptions& o, const std::string& v) { o.origin = mesh::ParseOriginPlacement(v); })
           .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin.has_value(); })
+          .Doc("QUIJIBO mesh targets: the fractal origin at the point deepest inside the shape (orbits are trapped "
+               "at the origin, so it must be inside for the n-step set to exist), or at the bounding box's centre "
+               "(reference)")
           .Enum(
               "frame_scale", "--frame-scale",
               "trap: fractal_radius chosen so that the unit ball about the origin, where the map sends the "
@@ -75,7 +91,12 @@ const Schema<TargetOptions>& TargetOptions::Settings() {
               "as given, as the reference code (mesh/normalize.h)",
               {"trap", "fixed"}, [](const TargetOptions& o) { return mesh::FrameScaleName(o.frame_scale); },
               [](TargetOptions& o, const std::string& v) { o.frame_scale = mesh::ParseFrameScale(v); })
-          .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin == mesh::OriginPlacement::kInside; });
+          .When([](const TargetOptions& o) { return !o.mesh.empty() && o.origin == mesh::OriginPlacement::kInside; })
+          .Doc("QUIJIBO mesh targets with `origin` `\"inside\"`: `fractal_radius` chosen so that the unit ball "
+               "about the origin, into which the map sends every point of the one-step set, just fits inside the "
+               "shape (the distance from the origin to the surface becomes 1; written to the map's frame), so the "
+               "n-step set keeps thin parts; or `fractal_radius` as given (reference). The one-step set does not "
+               "depend on it ([fidelity.md](fidelity.md) §3)");
   return s;
 }
 

@@ -21,7 +21,7 @@ struct TargetOptions {
   std::string qgrid;     // a signed distance grid (fractal frame); its .frame.json is read when present
   std::string analytic;  // "sphere[:radius=R]", "torus[:major=R,minor=r]" (and, for the shape modulus,
                          // "disc", "hexagram")
-  int resolution = 97;   // cells per axis of the target grid (the paper: 97)
+  int resolution = kDefaultTargetResolution;  // cells per axis of the target grid
   double padding = FractalFrame{}.padding;
   double fractal_radius = FractalFrame{}.fractal_radius;
   TargetBox box = TargetBox::kUnitCube;  // mesh targets

@@ -27,7 +27,7 @@
 #include <sstream>
 #include <thread>
 
-#include "experiments/cli.h"
+#include "experiments/pipeline/energy.h"
 #include "experiments/pipeline/experiment.h"
 #include "experiments/pipeline/initial.h"
 #include "experiments/pipeline/mesh.h"
@@ -262,38 +262,23 @@ struct EnergyResult {
   py::dict report;
 };
 
-// `quijibo energy`'s evaluation (experiments/cli.h, EvaluateEnergy) on an in-memory map and target.
+// `quijibo energy`'s stage (experiments/pipeline/energy.h) on an in-memory map and target; the
+// keywords are its settings, read as the command line's are.
 EnergyResult Energy(const RationalMap& map, const ScalarGrid& target, double alpha, const std::string& evaluator,
                     const std::string& precision, const std::string& weights, int resolution,
                     const std::string& level_weights, double slice, const std::string& mode, bool gradient,
                     const std::string& storage, int repeats) {
   CheckMap(map, "energy");
-  EnergyOptions options;
-  options.alpha = alpha;
-  if (auto why = options.validate(); !why.empty()) throw Error("energy: " + why);
-  cli::EvaluatorChoice choice;
-  // "dense" is the optimizer's name of the log-linear evaluator (optim/optimizer.h).
-  choice.evaluator = evaluator == "dense" ? "loglinear" : evaluator;
-  choice.precision = ParsePrecision(precision);
-  choice.storage = ParseStorage(storage);
-  if (mode != "full" && mode != "variable")
-    throw Error("energy: unknown mode \"" + mode + "\": expected full or variable");
-  choice.mode = mode == "full" ? EnergyMode::kFull : EnergyMode::kVariable;
-  choice.gradient = gradient;
-  choice.repeats = repeats;
-  if (level_weights != "sample" && level_weights != "recompute")
-    throw Error("energy: unknown level_weights \"" + level_weights + "\": expected sample or recompute");
-  if (resolution < 0 || resolution > 4096) throw Error("energy: resolution must be in [0, 4096]");
-  const WeightField field = ParseWeightField(weights);
+  const json settings = {{"alpha", alpha},         {"evaluator", evaluator},         {"precision", precision},
+                         {"weights", weights},     {"resolution", resolution},       {"level_weights", level_weights},
+                         {"slice", slice},         {"mode", mode},                   {"gradient", gradient},
+                         {"storage", storage},     {"repeats", repeats}};
+  const auto options = pipeline::EnergyStageOptions::FromJson(JsonReader(settings, "energy"), "", ".");
   json report;
   {
     py::gil_scoped_release release;
-    const EnergyGrid grid = MakeEnergyGrid(
-        target, field, resolution, level_weights == "sample" ? LevelWeights::kSampleFinest : LevelWeights::kRecompute,
-        slice);
-    report = cli::EvaluateEnergy(map, grid, options, choice);
+    report = pipeline::EnergyStage(map, target, options);
   }
-  report["weights"] = weights;
   EnergyResult r;
   r.energy = report.at("energy").get<double>();
   if (gradient) {
@@ -929,14 +914,16 @@ PYBIND11_MODULE(quijibo, m) {
         s << "EnergyResult(energy=" << r.energy << ")";
         return s.str();
       });
-  m.def("energy", &Energy, py::arg("map"), py::arg("grid"), py::kw_only(), py::arg("alpha") = EnergyOptions{}.alpha,
-        py::arg("evaluator") = cli::EvaluatorChoice{}.evaluator,
-        py::arg("precision") = PrecisionName(cli::EvaluatorChoice{}.precision),
-        // The defaults of `quijibo energy`, so that the same call gives the same double.
-        py::arg("weights") = WeightFieldName(kDefaultWeightField), py::arg("resolution") = 0, py::arg("level_weights") = "sample",
-        py::arg("slice") = 0.0, py::arg("mode") = "full", py::arg("gradient") = cli::EvaluatorChoice{}.gradient,
-        py::arg("storage") = StorageName(cli::EvaluatorChoice{}.storage),
-        py::arg("repeats") = cli::EvaluatorChoice{}.repeats,
+  const pipeline::EnergyStageOptions energy_defaults;
+  m.def("energy", &Energy, py::arg("map"), py::arg("grid"), py::kw_only(),
+        py::arg("alpha") = energy_defaults.energy.alpha, py::arg("evaluator") = energy_defaults.evaluator,
+        py::arg("precision") = PrecisionName(energy_defaults.precision),
+        py::arg("weights") = WeightFieldName(energy_defaults.weights), py::arg("resolution") = energy_defaults.resolution,
+        py::arg("level_weights") = optim::LevelWeightsName(energy_defaults.level_weights),
+        py::arg("slice") = energy_defaults.slice,
+        py::arg("mode") = std::string(energy_defaults.mode == EnergyMode::kFull ? "full" : "variable"),
+        py::arg("gradient") = energy_defaults.gradient, py::arg("storage") = StorageName(energy_defaults.storage),
+        py::arg("repeats") = energy_defaults.repeats,
         "psi = (1/eta) sum -tanh(alpha L) W of `map` on the target `grid` (a signed distance Grid), as `quijibo "
         "energy`: evaluator dense (log-linear, exact, double; also: loglinear) or cached (the paper's, any "
         "precision), weights layer/inverse/balanced, resolution 0 = the target's own grid, mode full or variable "

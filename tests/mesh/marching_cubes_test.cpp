@@ -17,16 +17,8 @@
 namespace quijibo::mesh {
 namespace {
 
+using testing::Lambda;
 using testing::TempDir;
-
-BatchField Lambda(std::function<double(const Vec3&)> f, double iso = 0.0) {
-  BatchField field;
-  field.iso = iso;
-  field.evaluate = [f](const Vec3* p, std::size_t n, double* v) {
-    for (std::size_t i = 0; i < n; ++i) v[i] = f(p[i]);
-  };
-  return field;
-}
 
 double Norm(const Vec3& p) { return std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]); }
 

@@ -8,14 +8,26 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <random>
 #include <set>
 #include <string>
 
+#include "mesh/marching_cubes.h"
 #include "mesh/triangle_mesh.h"
 
 namespace quijibo::testing {
+
+// A field of a function of one point, for the mesher.
+inline mesh::BatchField Lambda(std::function<double(const Vec3&)> f, double iso = 0.0) {
+  mesh::BatchField field;
+  field.iso = iso;
+  field.evaluate = [f](const Vec3* p, std::size_t n, double* v) {
+    for (std::size_t i = 0; i < n; ++i) v[i] = f(p[i]);
+  };
+  return field;
+}
 
 // Icosahedron subdivided `levels` times, vertices projected on the sphere (centre, radius),
 // faces counter-clockwise seen from outside.

@@ -17,13 +17,7 @@
 namespace quijibo::mesh {
 namespace {
 
-BatchField Lambda(std::function<double(const Vec3&)> f) {
-  BatchField field;
-  field.evaluate = [f](const Vec3* p, std::size_t n, double* v) {
-    for (std::size_t i = 0; i < n; ++i) v[i] = f(p[i]);
-  };
-  return field;
-}
+using testing::Lambda;
 
 // A ball and a capsule thinner than a cell poking out of it: the capsule's axis runs along a
 // lattice line of odd index, so no node of the search (stride 2 and coarser) is inside it, and

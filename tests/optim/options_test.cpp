@@ -137,16 +137,16 @@ TEST(OptimizeOptionsTest, BadValuesNameThePointerAndTheRange) {
 TEST(OptimizeOptionsTest, ValidateNamesTheSettingAndItsRange) {
   OptimizeOptions o;
   o.memory = 0;
-  EXPECT_EQ(o.Validate(), "memory must be in [1, 100], found 0");
+  EXPECT_EQ(o.Validate(), "memory: expected an integer in [1, 100], found 0");
   o = OptimizeOptions{};
   o.energy.alpha = -1;
-  EXPECT_EQ(o.Validate(), "alpha must be in (0.0, 1000000.0], found -1.0");
+  EXPECT_EQ(o.Validate(), "alpha: expected a number in (0.0, 1000000.0], found -1.0");
   o = OptimizeOptions{};
   o.max_iterations.R = 0;
-  EXPECT_EQ(o.Validate(), "max_iterations.R must be in [1, 10000000], found 0");
+  EXPECT_EQ(o.Validate(), "max_iterations.R: expected an integer in [1, 10000000], found 0");
   o = OptimizeOptions{};
   o.checkpoint_every = 0;
-  EXPECT_EQ(o.Validate(), "checkpoint_every must be in [1, 1000000], found 0");
+  EXPECT_EQ(o.Validate(), "checkpoint_every: expected an integer in [1, 1000000], found 0");
   o = OptimizeOptions{};
   o.backend = "bfgs";
   EXPECT_NE(o.Validate().find("bfgs"), std::string::npos);

@@ -148,7 +148,7 @@ void ExpectHelpShowsDefaults(const std::vector<std::string>& command, const O& o
   EXPECT_GT(checked, 0) << command[0];
 }
 
-// `quijibo optimize` binds to OptimizeOptions (optim/optimizer.h) with its own table of ranges.
+// `quijibo optimize` binds OptimizeOptions' schema entries (optim/optimizer.h), as `quijibo run` reads them.
 TEST(CommandLineSchema, OptimizeHelpShowsTheOptimizerDefaults) {
   const auto r = testing::RunQuijiboArgs({"optimize", "--help"});
   ASSERT_EQ(r.code, 0) << r.err;

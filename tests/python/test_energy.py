@@ -51,7 +51,7 @@ def test_energy_errors(tiny_case):
     with pytest.raises(quijibo.Error) as e:
         quijibo.energy(m, grid, precision="float128")
     assert str(e.value) == cli_error("energy", "-t", tiny_case["target"], "-m", tiny_case["map"], "-p", "float128")
-    with pytest.raises(quijibo.Error, match="unknown evaluator"):
+    with pytest.raises(quijibo.Error, match='energy: /evaluator: expected one of "loglinear", "dense", "cached", found "fast"'):
         quijibo.energy(m, grid, evaluator="fast")
     with pytest.raises(quijibo.Error, match="weight"):
         quijibo.energy(m, grid, weights="heavy")

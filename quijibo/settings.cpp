@@ -1,4 +1,4 @@
-#include "experiments/pipeline/settings.h"
+#include "quijibo/settings.h"
 
 #include <unistd.h>
 
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstring>
 
-namespace quijibo::pipeline {
+namespace quijibo {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
@@ -86,6 +86,41 @@ std::string CheckValue(const json& v, SettingType type, double lo, double hi, bo
   }
 }
 
+std::string SettingTypeName(SettingType type) {
+  switch (type) {
+    case SettingType::kInteger: return "integer";
+    case SettingType::kNumber: return "number";
+    case SettingType::kBoolean: return "boolean";
+    case SettingType::kString: return "string";
+    case SettingType::kChoice: return "choice";
+    case SettingType::kPath: return "path";
+    case SettingType::kNumbers: return "numbers";
+  }
+  return "";
+}
+
+json DescribeSetting(const std::string& key, const std::string& flag, const std::string& help, SettingType type,
+                     const json& default_value, double lo, double hi, bool open_lo, bool open_hi,
+                     const std::vector<std::string>& choices, const std::vector<int>& sizes) {
+  json d = {{"key", key}, {"flag", flag}, {"help", help}, {"type", SettingTypeName(type)}, {"default", default_value}};
+  const SettingType element = type == SettingType::kNumbers ? SettingType::kNumber : type;
+  const bool numeric = element == SettingType::kInteger || element == SettingType::kNumber;
+  if (const std::string range = numeric ? DescribeRange(element, lo, hi, open_lo, open_hi) : ""; !range.empty()) {
+    d["range"] = range;
+    if (std::isfinite(lo)) d["lo"] = lo, d["open_lo"] = open_lo;
+    if (std::isfinite(hi)) d["hi"] = hi, d["open_hi"] = open_hi;
+  }
+  if (!choices.empty()) d["choices"] = choices;
+  if (!sizes.empty()) d["sizes"] = sizes;
+  return d;
+}
+
+std::string CheckRange(const std::string& name, SettingType type, double value, const ValueRange& r) {
+  const json v = type == SettingType::kInteger ? json(static_cast<long long>(value)) : json(value);
+  const std::string why = CheckValue(v, type, r.lo, r.hi, r.open_lo, r.open_hi, {}, {});
+  return why.empty() ? why : name + ": " + why;
+}
+
 std::string ResolvePath(const fs::path& base, const std::string& p) {
   fs::path f(p);
   return (f.is_relative() ? (base / f).lexically_normal() : f).string();
@@ -146,4 +181,4 @@ json ReadValue(const JsonReader& r, const std::string& p, SettingType type, doub
   return v;
 }
 
-}  // namespace quijibo::pipeline
+}  // namespace quijibo
