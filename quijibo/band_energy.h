@@ -141,17 +141,13 @@ class BandEnergy {
   void Adopt(const Eigen::VectorXd& x, bool variable, double energy);
   void UpdateConstants();
   void UpdateBlockConstants();
-  // Groups `cells` (ascending) by the dense evaluator's kEnergyBlock blocks.
-  static void Group(const std::vector<std::int64_t>& cells, std::vector<std::int64_t>* ids,
-                    std::vector<std::int64_t>* offsets);
-  // Evaluates the cells `cells` (grouped as by Group) whose rank_ is below `below` (all if
-  // `below` < 0): their
-  // exact energy sum, gradient totals (as LogLinearEnergy::Assemble takes them) and non-finite
-  // count; records L and, in full mode, the row norm into scratch_ and row_norm_ when `capture`.
-  void SumCells(const Eigen::VectorXd& x, const double* coeff, bool variable, bool with_gradient,
-                const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& ids,
-                const std::vector<std::int64_t>& offsets, std::int32_t below, bool capture,
-                loglinear::Fixed* energy, std::vector<double>* total, std::int64_t* nonfinite);
+  // Groups `cells` (ascending) by the dense evaluator's kEnergyBlock blocks: the offsets of
+  // CellBlocks.
+  static std::vector<std::int64_t> Group(const std::vector<std::int64_t>& cells);
+  // `cells` grouped as by Group (offsets) for LogLinearEnergy::SumBlocks, without the cells whose
+  // rank_ is `below` or more (all cells if `below` < 0).
+  LogLinearEnergy::CellBlocks Blocks(const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& offsets,
+                                     std::int32_t below) const;
   // ||v(x) - v(x0)||_2 and ||v(x)||_2 (see above).
   double Displacement(const Eigen::VectorXd& x, const double* coeff) const;
   double RoundingBound(const Eigen::VectorXd& x, const double* coeff) const;
@@ -172,7 +168,7 @@ class BandEnergy {
   std::vector<std::int64_t> list_cells_prefix_;  // cells in the first k items
   double list_cap_ = 0;                      // every cell beyond the list has r_c >= list_cap_
   std::vector<std::int64_t> candidates_;     // band and list cells, ascending
-  std::vector<std::int64_t> block_ids_, block_offsets_;  // kEnergyBlock blocks holding candidates
+  std::vector<std::int64_t> block_offsets_;  // candidates_ grouped by kEnergyBlock blocks
   loglinear::Fixed const_total_ = 0;         // energy of all saturated (non-band) cells
   std::vector<loglinear::Fixed> prefix_;     // energy of the first k list items
   long long extra_ = 0;                      // list cells evaluated since the anchor

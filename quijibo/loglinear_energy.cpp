@@ -267,20 +267,28 @@ Evaluation<double> LogLinearEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMod
 
 Evaluation<double> LogLinearEnergy::EvaluateCapturing(const Eigen::VectorXd& x, EnergyMode mode, bool with_gradient,
                                                       double* L_active, double* row_norm) const {
-  using loglinear::Fixed;
   const auto start = std::chrono::steady_clock::now();
   CheckX(x);
   const bool variable = mode == EnergyMode::kVariable;
   if (variable && !variable_ready()) throw Error("energy: a V-pass evaluation needs BeginVariablePass first");
-  const std::int64_t m = std::int64_t(cells_.size());
+  std::vector<double> coeff(static_cast<std::size_t>(root_count()));
+  Coefficients(x, coeff.data());
+  const BlockSums sums = SumBlocks(x, coeff.data(), variable, with_gradient, AllCells(), L_active, row_norm);
+  Evaluation<double> ev = Assemble(x, variable, with_gradient, sums.energy, sums.total.data(), sums.nonfinite);
+  ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return ev;
+}
+
+LogLinearEnergy::BlockSums LogLinearEnergy::SumBlocks(const Eigen::VectorXd& x, const double* coeff, bool variable,
+                                                      bool with_gradient, const CellBlocks& blocks, double* L_active,
+                                                      double* row_norm) const {
+  using loglinear::Fixed;
+  const std::int64_t m = active_count();
   const int r = root_count();
   const double lnC = x[0], tau = x[1], beta = x[2], alpha = options_.alpha, scale = energy_scale_;
-  // L_c = ln C + sum_j coeff_j D_cj, coeff = [tau T, -beta B].
-  std::vector<double> coeff(r);
-  Coefficients(x, coeff.data());
-  // Block partials: [sum g, sum g S_T, sum g S_B] and, in full mode, G_r (from totals[3]).
+  // Block partials: [sum g, sum g S_T, sum g S_B] and, in full mode, G_r (from total[3]).
   const int nb_vals = 3 + (with_gradient && !variable ? r : 0);
-  const std::int64_t nblocks = (m + kEnergyBlock - 1) / kEnergyBlock;
+  const std::int64_t nblocks = blocks.count;
   std::vector<double> partial(std::size_t(nblocks * nb_vals), 0.0);
   std::vector<Fixed> block_energy(std::size_t(nblocks), 0);
   std::vector<std::int64_t> block_nonfinite(std::size_t(nblocks), 0);
@@ -288,21 +296,24 @@ Evaluation<double> LogLinearEnergy::EvaluateCapturing(const Eigen::VectorXd& x, 
   // One block needs no threads (and a busy machine makes waking them costly).
 #pragma omp parallel if (nblocks > 1)
   {
-    std::vector<double> buffer(r);
+    std::vector<double> buffer(static_cast<std::size_t>(r));
 #pragma omp for schedule(dynamic, 1)
     for (std::int64_t blk = 0; blk < nblocks; ++blk) {
       double* out = partial.data() + blk * nb_vals;
       Fixed energy = 0;
       std::int64_t nonfinite = 0;
-      const std::int64_t end = std::min(m, (blk + 1) * kEnergyBlock);
-      for (std::int64_t a = blk * kEnergyBlock; a < end; ++a) {
+      const std::int64_t begin = blocks.offsets ? blocks.offsets[blk] : blk * kEnergyBlock;
+      const std::int64_t end = blocks.offsets ? blocks.offsets[blk + 1] : std::min(m, (blk + 1) * kEnergyBlock);
+      for (std::int64_t i = begin; i < end; ++i) {
+        const std::int64_t a = blocks.cells ? blocks.cells[i] : i;
+        if (blocks.rank && blocks.rank[a] >= blocks.below) continue;
         const double* row = nullptr;
         double L;
         if (variable) {
           L = loglinear::VariableL(lnC, tau, beta, s_top_[a], s_bottom_[a]);
         } else {
           row = RowOf(a, buffer.data());
-          L = lnC + loglinear::Dot(coeff.data(), row, r);
+          L = lnC + loglinear::Dot(coeff, row, r);
           if (row_norm) {
             double n2 = 1.0;
 #pragma omp simd reduction(+ : n2)
@@ -328,17 +339,16 @@ Evaluation<double> LogLinearEnergy::EvaluateCapturing(const Eigen::VectorXd& x, 
     }
   }
 
-  std::vector<double> total(std::size_t(nb_vals), 0.0);
-  Fixed energy = 0;
-  std::int64_t nonfinite = 0;
+  // A dense block without evaluated cells adds exact zeros: the visited blocks' sums, in block
+  // order, are the dense totals.
+  BlockSums sums;
+  sums.total.assign(std::size_t(nb_vals), 0.0);
   for (std::int64_t b = 0; b < nblocks; ++b) {
-    for (int k = 0; k < nb_vals; ++k) total[k] += partial[std::size_t(b * nb_vals + k)];
-    energy += block_energy[b];
-    nonfinite += block_nonfinite[b];
+    for (int k = 0; k < nb_vals; ++k) sums.total[k] += partial[std::size_t(b * nb_vals + k)];
+    sums.energy += block_energy[b];
+    sums.nonfinite += block_nonfinite[b];
   }
-  Evaluation<double> ev = Assemble(x, variable, with_gradient, energy, total.data(), nonfinite);
-  ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return ev;
+  return sums;
 }
 
 Evaluation<double> LogLinearEnergy::Assemble(const Eigen::VectorXd& x, bool variable, bool with_gradient,

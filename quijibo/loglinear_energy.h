@@ -97,6 +97,34 @@ class LogLinearEnergy {
   bool variable_ready() const { return s_top_.size() == cells_.size(); }
   // coeff = [tau T, -beta B] of x.
   void Coefficients(const Eigen::VectorXd& x, double* coeff) const;
+
+  // The cells a block sum visits. Block b holds positions offsets[b] .. offsets[b+1] (offsets
+  // null: b kEnergyBlock .. (b+1) kEnergyBlock, clipped to the active cells); position i is
+  // active cell cells[i] (cells null: i). With rank, cells whose rank is >= below are skipped
+  // (the band's provably saturated ones). Blocks are the dense evaluator's kEnergyBlock blocks,
+  // or subsets of them in cell order: that is what makes the sums agree bit for bit.
+  struct CellBlocks {
+    std::int64_t count = 0;
+    const std::int64_t* offsets = nullptr;
+    const std::int64_t* cells = nullptr;
+    const std::int32_t* rank = nullptr;
+    std::int32_t below = 0;
+  };
+  // Sums over the visited cells: the exact energy, the totals Assemble takes and the non-finite
+  // count.
+  struct BlockSums {
+    loglinear::Fixed energy = 0;
+    std::vector<double> total;
+    std::int64_t nonfinite = 0;
+  };
+  // The one cell loop of the dense evaluator and the band: per block and in cell order, L (from
+  // coeff = Coefficients(x), or the V-pass sums), tanh, the energy term and the gradient sums;
+  // then the blocks' sums in block order. Also writes L of each visited cell to L_active and, in
+  // full mode, sqrt(1 + sum_r D_cr^2) to row_norm (each if not null).
+  BlockSums SumBlocks(const Eigen::VectorXd& x, const double* coeff, bool variable, bool with_gradient,
+                      const CellBlocks& blocks, double* L_active, double* row_norm) const;
+  // All active cells in kEnergyBlock blocks (what a dense evaluation visits).
+  CellBlocks AllCells() const { return {(active_count() + kEnergyBlock - 1) / kEnergyBlock}; }
   void CheckX(const Eigen::VectorXd& x) const;
   // The evaluation from its sums: energy (in 1/energy_scale units) and, per mode, totals =
   // [sum g, sum g S_T, sum g S_B] (V pass) or [sum g, 0, 0, G_1..G_R] (full).
