@@ -170,7 +170,7 @@ LogLinearEnergy::CellBlocks BandEnergy::Blocks(const std::vector<std::int64_t>& 
 Evaluation<double> BandEnergy::Sweep(const Eigen::VectorXd& x, bool variable, bool with_gradient) {
   const std::int64_t m = dense_->active_count();
   scratch_.resize(std::size_t(m));
-  if (blocks_ && !variable) return BlockSweep(x, with_gradient);
+  if (blocks_ && !variable) return BlockSweep(x, with_gradient, true);
   pending_blocked_ = false;
   stats_.sweep_cells += m;
   const bool need_norms = !variable && row_norm_.empty();
@@ -279,7 +279,7 @@ std::vector<double> BandEnergy::LogModulus(const Eigen::VectorXd& x) const {
   return L;
 }
 
-Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gradient) {
+Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gradient, bool keep_rows) {
   const std::int64_t m = dense_->active_count();
   const std::int64_t nb = blocks_->count();
   const int r = dense_->root_count();
@@ -300,6 +300,12 @@ Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gr
   ++stats_.block_sweeps;
   stats_.sweep_cells += std::int64_t(pending_exact_.size()) + 2 * nb;
 
+  if (keep_rows) {
+    // The anchor's rows and this sweep's: the next sweeps evaluate much the same cells.
+    std::vector<std::int64_t> rows = row_order_;
+    rows.insert(rows.end(), pending_exact_.begin(), pending_exact_.end());
+    dense_->CacheRows(rows);
+  }
   row_norm_.resize(std::size_t(m));
   const std::vector<std::int64_t> offsets = Group(pending_exact_);
   const LogLinearEnergy::BlockSums sums = dense_->SumBlocks(x, coeff.data(), false, with_gradient,
@@ -442,16 +448,18 @@ void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
   }
   block_offsets_ = Group(candidates_);
   if (!variable && dense_->storage() == LogLinearOptions::Storage::kOnTheFly) {
-    // Rows to keep, most used first: the band's, then the list's by radius.
-    std::vector<std::int64_t> order;
-    order.reserve(candidates_.size());
+    // Rows to keep, most used first: the band's, the list's by radius, then those of the blocks
+    // the anchor could not prove saturated (every block sweep evaluates them).
+    row_order_.clear();
     for (std::int64_t a : candidates_)
-      if (rank_[a] < 0) order.push_back(a);
+      if (rank_[a] < 0) row_order_.push_back(a);
     for (std::int64_t id : list_cell_) {
-      if (id >= 0) order.push_back(id);
-      else blocks_->AppendCells(-id - 1, &order);
+      if (id >= 0) row_order_.push_back(id);
+      else blocks_->AppendCells(-id - 1, &row_order_);
     }
-    dense_->CacheRows(order);
+    std::vector<std::int64_t> rows = row_order_;
+    rows.insert(rows.end(), exact_.begin(), exact_.end());
+    dense_->CacheRows(rows);
   }
   anchor_cost_ = anchor_blocked_ ? std::int64_t(exact_.size()) + 2 * blocks_->count() : m;
   weights_version_ = ~std::uint64_t(0);  // constants follow the new band
@@ -500,7 +508,7 @@ Evaluation<double> BandEnergy::EvaluateOnce(const Eigen::VectorXd& x, bool with_
   const std::int64_t m = dense_->active_count();
   scratch_.resize(std::size_t(m));
   // The pending state is only read by Adopt, which follows a sweep of its own.
-  return BlockSweep(x, with_gradient);
+  return BlockSweep(x, with_gradient, false);
 }
 
 Evaluation<double> BandEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mode, bool with_gradient) {

@@ -28,7 +28,7 @@
 // 4 (R+1) u ||v||_2 max_c N_c.
 //
 // Blocks (on-the-fly storage, where a dense sweep costs R logarithms per cell: the levels beyond
-// 97^3). The grid is cut into blocks of kBandBlockSide^3 cells. Take a block with centre p, whose
+// 97^3, and with storage kAuto any matrix over an eighth of the memory budget). The grid is cut into blocks of kBandBlockSide^3 cells. Take a block with centre p, whose
 // cell centres q = p + delta lie within h of p (delta in the slice), and a root at distance
 // d_j > h from p. Two bounds on how far L moves inside the block:
 //   first order in each root:  |D_qj - D_pj| <= e_j = -log(1 - h/d_j), so
@@ -42,8 +42,9 @@
 // bounded by N_B = sqrt(1 + sum_j (|D_pj| + e_j)^2) >= N_c, so it stays
 // saturated while d(x) <= r_B = slack / N_B, like a cell. An anchor then costs one pass over the
 // blocks (~4R operations each) plus the cells of the blocks it could not prove saturated, whose
-// rows the dense evaluator caches (LogLinearEnergy::CacheRows); the list's reach is capped by the
-// smallest r_B. Blocks with a root within h are never saturated; V passes (O(cells) per sweep) do
+// rows the dense evaluator caches with the band's and the list's (LogLinearEnergy::CacheRows: the
+// cache follows them as they move, ~1 GB for the bunny at 97^3 against 4.4 GB of matrix); the
+// list's reach is capped by the smallest r_B. Blocks with a root within h are never saturated; V passes (O(cells) per sweep) do
 // not use blocks.
 #pragma once
 
@@ -132,7 +133,9 @@ class BandEnergy {
   // An evaluation that records L (in scratch_) and the row norms: dense (the norms only the first
   // time) or, with blocks in full mode, over the blocks and the cells of the unproven ones.
   Evaluation<double> Sweep(const Eigen::VectorXd& x, bool variable, bool with_gradient);
-  Evaluation<double> BlockSweep(const Eigen::VectorXd& x, bool with_gradient);
+  // keep_rows: the dense evaluator keeps the rows the sweep evaluates (CacheRows), beside the
+  // anchor's; EvaluateOnce does not, so that isolated evaluations cost no memory.
+  Evaluation<double> BlockSweep(const Eigen::VectorXd& x, bool with_gradient, bool keep_rows);
   // Proves blocks saturated at x: sign (0: not proven) and radius r_B of each; returns the largest
   // N_B of the saturated blocks.
   double ScanBlocks(const Eigen::VectorXd& x, const double* coeff, std::vector<signed char>* sign,
@@ -169,6 +172,7 @@ class BandEnergy {
   double list_cap_ = 0;                      // every cell beyond the list has r_c >= list_cap_
   std::vector<std::int64_t> candidates_;     // band and list cells, ascending
   std::vector<std::int64_t> block_offsets_;  // candidates_ grouped by kEnergyBlock blocks
+  std::vector<std::int64_t> row_order_;      // on the fly: the anchor's candidates, most used first
   loglinear::Fixed const_total_ = 0;         // energy of all saturated (non-band) cells
   std::vector<loglinear::Fixed> prefix_;     // energy of the first k list items
   long long extra_ = 0;                      // list cells evaluated since the anchor

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "quijibo/error.h"
@@ -107,9 +108,13 @@ LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
   const std::int64_t m = std::int64_t(cells_.size());
   const int r = root_count();
   cache_budget_bytes_ = loglinear.memory_budget_bytes / 2;
-  if (storage_ == Storage::kAuto)
-    storage_ = double(m) * r * sizeof(double) <= loglinear.memory_budget_bytes ? Storage::kDouble
-                                                                                : Storage::kOnTheFly;
+  if (storage_ == Storage::kAuto) {
+    const double matrix = double(m) * r * sizeof(double);
+    const double stored_max = loglinear.band ? loglinear.memory_budget_bytes / 8 : loglinear.memory_budget_bytes;
+    storage_ = matrix <= stored_max ? Storage::kDouble : Storage::kOnTheFly;
+    // Not stored to save memory: the band's rows get what a stored matrix could have taken.
+    if (matrix <= loglinear.memory_budget_bytes) cache_budget_bytes_ = std::min(cache_budget_bytes_, stored_max);
+  }
   if (storage_ == Storage::kDouble || storage_ == Storage::kFloat) {
     if (storage_ == Storage::kDouble) d_double_.resize(std::size_t(m) * r);
     else d_float_.resize(std::size_t(m) * r);
@@ -150,32 +155,52 @@ void LogLinearEnergy::CacheRows(const std::vector<std::int64_t>& actives) const 
   if (storage_ != Storage::kOnTheFly) return;
   const int r = root_count();
   const std::size_t row_bytes = std::size_t(r) * sizeof(double);
+  const std::size_t cap = std::size_t(std::min(cache_budget_bytes_ / double(row_bytes),
+                                               double(std::numeric_limits<std::int32_t>::max() - 1)));
   if (row_slot_.empty()) row_slot_.assign(cells_.size(), -1);
-  std::vector<std::int64_t> missing;
-  for (std::int64_t a : actives)
-    if (row_slot_[std::size_t(a)] < 0) missing.push_back(a);
-  std::size_t rows = row_cache_.size() / std::size_t(r);
-  if (double(rows + missing.size()) * double(row_bytes) > cache_budget_bytes_) {
-    std::fill(row_slot_.begin(), row_slot_.end(), -1);
-    row_cache_.clear();
-    rows = 0;
-    const std::size_t fit = std::size_t(std::min(cache_budget_bytes_ / double(row_bytes),
-                                                 double(std::numeric_limits<std::int32_t>::max() - 1)));
-    missing.assign(actives.begin(), actives.begin() + std::min(actives.size(), fit));
+  // The distinct rows asked for, in order, as many as fit; `fresh`: those not kept yet. Afterwards
+  // the cache holds `wanted` <= cap rows and at most a third more not asked for.
+  std::vector<char> asked(cells_.size(), 0);
+  std::size_t wanted = 0;
+  std::vector<std::int64_t> fresh;
+  for (std::int64_t a : actives) {
+    if (wanted == cap) break;
+    if (asked[std::size_t(a)]) continue;
+    asked[std::size_t(a)] = 1;
+    ++wanted;
+    if (row_slot_[std::size_t(a)] < 0) fresh.push_back(a);
   }
-  if (missing.empty()) return;
-  // Duplicates in `actives` get one slot.
-  std::int64_t n = 0;
-  for (std::int64_t a : missing)
-    if (row_slot_[std::size_t(a)] < 0) {
-      row_slot_[std::size_t(a)] = std::int32_t(rows + std::size_t(n));
-      missing[std::size_t(n++)] = a;
+  std::size_t rows = row_cell_.size();
+  const std::size_t stale = rows - (wanted - fresh.size());
+  if (rows + fresh.size() > cap || (stale > 0 && 4 * stale > rows + fresh.size())) {
+    // Drop the rows not asked for, moving the others down in slot order (no second copy).
+    std::size_t next = 0;
+    for (std::size_t slot = 0; slot < rows; ++slot) {
+      const std::int64_t a = row_cell_[slot];
+      if (!asked[std::size_t(a)]) {
+        row_slot_[std::size_t(a)] = -1;
+        continue;
+      }
+      if (next != slot) std::memcpy(Slot(next), Slot(slot), row_bytes);  // next < slot: distinct rows
+      row_slot_[std::size_t(a)] = std::int32_t(next);
+      row_cell_[next++] = a;
     }
-  row_cache_.resize((rows + std::size_t(n)) * std::size_t(r));
+    rows = next;
+    row_cell_.resize(rows);
+  }
+  for (std::int64_t a : fresh) {
+    row_slot_[std::size_t(a)] = std::int32_t(row_cell_.size());
+    row_cell_.push_back(a);
+  }
+  const std::size_t chunks = (row_cell_.size() + kChunkRows - 1) / kChunkRows;
+  row_chunks_.resize(chunks);  // frees the chunks beyond
+  for (auto& chunk : row_chunks_)
+    if (!chunk) chunk = std::make_unique_for_overwrite<double[]>(kChunkRows * std::size_t(r));
+  const std::int64_t n = std::int64_t(fresh.size());
 #pragma omp parallel for schedule(static) if (n > kEnergyBlock)
   for (std::int64_t i = 0; i < n; ++i) {
-    const std::int64_t a = missing[std::size_t(i)];
-    Row(a, row_cache_.data() + std::size_t(row_slot_[std::size_t(a)]) * std::size_t(r));
+    const std::int64_t a = fresh[std::size_t(i)];
+    Row(a, Slot(std::size_t(row_slot_[std::size_t(a)])));
   }
 }
 
@@ -209,7 +234,7 @@ const double* LogLinearEnergy::RowOf(std::int64_t a, double* buffer) const {
     for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
   } else {
     if (!row_slot_.empty() && row_slot_[std::size_t(a)] >= 0)
-      return row_cache_.data() + std::size_t(row_slot_[std::size_t(a)]) * std::size_t(r);
+      return Slot(std::size_t(row_slot_[std::size_t(a)]));
     Row(a, buffer);
   }
   return buffer;
