@@ -447,25 +447,27 @@ void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
       if (rank_[a] != kOutside) candidates_.push_back(a);
   }
   block_offsets_ = Group(candidates_);
-  if (!variable && dense_->storage() == LogLinearOptions::Storage::kOnTheFly) {
-    // Rows to keep, most used first: the band's, the list's by radius, then those of the blocks
-    // the anchor could not prove saturated (every block sweep evaluates them).
-    row_order_.clear();
-    for (std::int64_t a : candidates_)
-      if (rank_[a] < 0) row_order_.push_back(a);
-    for (std::int64_t id : list_cell_) {
-      if (id >= 0) row_order_.push_back(id);
-      else blocks_->AppendCells(-id - 1, &row_order_);
-    }
-    std::vector<std::int64_t> rows = row_order_;
-    rows.insert(rows.end(), exact_.begin(), exact_.end());
-    dense_->CacheRows(rows);
-  }
+  if (!variable && dense_->storage() == LogLinearOptions::Storage::kOnTheFly) KeepRows();
   anchor_cost_ = anchor_blocked_ ? std::int64_t(exact_.size()) + 2 * blocks_->count() : m;
   weights_version_ = ~std::uint64_t(0);  // constants follow the new band
   extra_ = 0;
   anchored_ = true;
   stats_.band_cells = band_count_;
+}
+
+void BandEnergy::KeepRows() {
+  // Most used first: the band's rows, the list's by radius, then those of the blocks the anchor
+  // could not prove saturated (every block sweep evaluates them).
+  row_order_.clear();
+  for (std::int64_t a : candidates_)
+    if (rank_[a] < 0) row_order_.push_back(a);
+  for (std::int64_t id : list_cell_) {
+    if (id >= 0) row_order_.push_back(id);
+    else blocks_->AppendCells(-id - 1, &row_order_);
+  }
+  std::vector<std::int64_t> rows = row_order_;
+  rows.insert(rows.end(), exact_.begin(), exact_.end());
+  dense_->CacheRows(rows);
 }
 
 void BandEnergy::UpdateConstants() {

@@ -144,6 +144,8 @@ class BandEnergy {
   void Adopt(const Eigen::VectorXd& x, bool variable, double energy);
   void UpdateConstants();
   void UpdateBlockConstants();
+  // On the fly: has the dense evaluator keep the anchor's rows (sets row_order_).
+  void KeepRows();
   // Groups `cells` (ascending) by the dense evaluator's kEnergyBlock blocks: the offsets of
   // CellBlocks.
   static std::vector<std::int64_t> Group(const std::vector<std::int64_t>& cells);
