@@ -236,7 +236,11 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
       if ((*observer)(s) == CallbackReturnType::kAbort) abort = true;
   };
 
-  PassWeights weights(sdf, o.weights, map, o.energy, o.loglinear());
+  // Unless the passes evaluate densely, the log-linear evaluators are read through bands (the
+  // absolute energy's too, where not stored), which need only the rows near the surface.
+  LogLinearOptions loglinear_options = o.loglinear();
+  loglinear_options.band = evaluator != "dense";
+  PassWeights weights(sdf, o.weights, map, o.energy, loglinear_options);
   // The resolution each level runs at (deterministic, so a resumed run finds the same).
   st.summary.levels.clear();
   for (const LevelSpec& level : o.schedule.levels) {
@@ -288,7 +292,7 @@ OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptio
     std::unique_ptr<Objective<Scalar>> objective;
     if constexpr (std::is_same_v<Scalar, double>) {
       if (loglinear) {
-        if (!share) level_energy = std::make_unique<LogLinearEnergy>(map, grid, o.energy, o.loglinear());
+        if (!share) level_energy = std::make_unique<LogLinearEnergy>(map, grid, o.energy, loglinear_options);
         LogLinearEnergy* e = share ? &weights.absolute_evaluator() : level_energy.get();
         if (evaluator == "band")
           objective = std::make_unique<BandObjective>(e, share ? weights.absolute_blocks() : nullptr);

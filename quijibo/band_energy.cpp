@@ -146,88 +146,31 @@ double BandEnergy::RoundingBound(const Eigen::VectorXd& x, const double* coeff) 
   return 4.0 * terms * kUnit * std::sqrt(v) * norm_max_;
 }
 
-void BandEnergy::Group(const std::vector<std::int64_t>& cells, std::vector<std::int64_t>* ids,
-                       std::vector<std::int64_t>* offsets) {
-  ids->clear();
-  offsets->clear();
-  for (std::size_t i = 0; i < cells.size(); ++i) {
-    const std::int64_t b = cells[i] / kEnergyBlock;
-    if (ids->empty() || ids->back() != b) {
-      ids->push_back(b);
-      offsets->push_back(std::int64_t(i));
-    }
-  }
-  offsets->push_back(std::int64_t(cells.size()));
+std::vector<std::int64_t> BandEnergy::Group(const std::vector<std::int64_t>& cells) {
+  std::vector<std::int64_t> offsets;
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    if (i == 0 || cells[i] / kEnergyBlock != cells[i - 1] / kEnergyBlock) offsets.push_back(std::int64_t(i));
+  offsets.push_back(std::int64_t(cells.size()));
+  return offsets;
 }
 
-void BandEnergy::SumCells(const Eigen::VectorXd& x, const double* coeff, bool variable, bool with_gradient,
-                          const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& ids,
-                          const std::vector<std::int64_t>& offsets, std::int32_t below, bool capture,
-                          Fixed* energy_out, std::vector<double>* total, std::int64_t* nonfinite_out) {
-  const int r = dense_->root_count();
-  const double lnC = x[0], tau = x[1], beta = x[2], alpha = dense_->alpha(), scale = dense_->energy_scale();
-  const int nb_vals = 3 + (with_gradient && !variable ? r : 0);
-  const std::int64_t nblocks = std::int64_t(ids.size());
-  std::vector<double> partial(std::size_t(nblocks * nb_vals), 0.0);
-  std::vector<Fixed> block_energy(std::size_t(nblocks), 0);
-  std::vector<std::int64_t> block_nonfinite(std::size_t(nblocks), 0);
-#pragma omp parallel if (nblocks > 1)
-  {
-    std::vector<double> buffer(static_cast<std::size_t>(r));
-#pragma omp for schedule(dynamic, 1)
-    for (std::int64_t bi = 0; bi < nblocks; ++bi) {
-      double* out = partial.data() + bi * nb_vals;
-      Fixed energy = 0;
-      std::int64_t nonfinite = 0;
-      for (std::int64_t i = offsets[std::size_t(bi)]; i < offsets[std::size_t(bi + 1)]; ++i) {
-        const std::int64_t a = cells[std::size_t(i)];
-        if (below >= 0 && rank_[std::size_t(a)] >= below) continue;  // provably saturated: in the constant
-        const double* row = nullptr;
-        double L;
-        if (variable) {
-          L = loglinear::VariableL(lnC, tau, beta, dense_->s_top(a), dense_->s_bottom(a));
-        } else {
-          row = dense_->RowOf(a, buffer.data());
-          L = lnC + loglinear::Dot(coeff, row, r);
-          if (capture) {
-            double n2 = 1.0;
-#pragma omp simd reduction(+ : n2)
-            for (int j = 0; j < r; ++j) n2 += row[j] * row[j];
-            row_norm_[std::size_t(a)] = std::sqrt(n2);
-          }
-        }
-        if (capture) scratch_[std::size_t(a)] = L;
-        const double W = dense_->weight(a);
-        double g;
-        const double th = loglinear::Tanh(alpha, L, W, &g);
-        bool bad = false;
-        energy += loglinear::EnergyFixed(th, W, scale, &bad);
-        nonfinite += bad;
-        if (!with_gradient || g == 0.0) continue;
-        if (variable) loglinear::AccumulateVariable(g, dense_->s_top(a), dense_->s_bottom(a), out);
-        else {
-          out[0] += g;
-          loglinear::Axpy(g, row, out + 3, r);
-        }
-      }
-      block_energy[std::size_t(bi)] = energy;
-      block_nonfinite[std::size_t(bi)] = nonfinite;
-    }
+LogLinearEnergy::CellBlocks BandEnergy::Blocks(const std::vector<std::int64_t>& cells,
+                                               const std::vector<std::int64_t>& offsets, std::int32_t below) const {
+  LogLinearEnergy::CellBlocks blocks;
+  blocks.count = std::int64_t(offsets.size()) - 1;
+  blocks.offsets = offsets.data();
+  blocks.cells = cells.data();
+  if (below >= 0) {
+    blocks.rank = rank_.data();
+    blocks.below = below;
   }
-  // Blocks without evaluated cells add exact zeros in the dense sums: summing the others in block
-  // order gives the dense totals.
-  total->assign(std::size_t(nb_vals), 0.0);
-  for (std::int64_t bi = 0; bi < nblocks; ++bi) {
-    for (int j = 0; j < nb_vals; ++j) (*total)[std::size_t(j)] += partial[std::size_t(bi * nb_vals + j)];
-    *energy_out += block_energy[std::size_t(bi)];
-    *nonfinite_out += block_nonfinite[std::size_t(bi)];
-  }
+  return blocks;
 }
 
 Evaluation<double> BandEnergy::Sweep(const Eigen::VectorXd& x, bool variable, bool with_gradient) {
   const std::int64_t m = dense_->active_count();
   scratch_.resize(std::size_t(m));
-  if (blocks_ && !variable) return BlockSweep(x, with_gradient);
+  if (blocks_ && !variable) return BlockSweep(x, with_gradient, true);
   pending_blocked_ = false;
   stats_.sweep_cells += m;
   const bool need_norms = !variable && row_norm_.empty();
@@ -336,7 +279,7 @@ std::vector<double> BandEnergy::LogModulus(const Eigen::VectorXd& x) const {
   return L;
 }
 
-Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gradient) {
+Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gradient, bool keep_rows) {
   const std::int64_t m = dense_->active_count();
   const std::int64_t nb = blocks_->count();
   const int r = dense_->root_count();
@@ -357,14 +300,18 @@ Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gr
   ++stats_.block_sweeps;
   stats_.sweep_cells += std::int64_t(pending_exact_.size()) + 2 * nb;
 
+  if (keep_rows) {
+    // The anchor's rows and this sweep's: the next sweeps evaluate much the same cells.
+    std::vector<std::int64_t> rows = row_order_;
+    rows.insert(rows.end(), pending_exact_.begin(), pending_exact_.end());
+    dense_->CacheRows(rows);
+  }
   row_norm_.resize(std::size_t(m));
-  std::vector<std::int64_t> ids, offsets;
-  Group(pending_exact_, &ids, &offsets);
-  Fixed energy = 0;
-  std::vector<double> total;
-  std::int64_t nonfinite = 0;
-  SumCells(x, coeff.data(), false, with_gradient, pending_exact_, ids, offsets, -1, true, &energy, &total,
-           &nonfinite);
+  const std::vector<std::int64_t> offsets = Group(pending_exact_);
+  const LogLinearEnergy::BlockSums sums = dense_->SumBlocks(x, coeff.data(), false, with_gradient,
+                                                            Blocks(pending_exact_, offsets, -1), scratch_.data(),
+                                                            row_norm_.data());
+  Fixed energy = sums.energy;
   for (std::int64_t a : pending_exact_) norm_max = std::max(norm_max, row_norm_[std::size_t(a)]);
   // The saturated blocks' cells: -+W each, exactly as the dense evaluator's terms.
   UpdateBlockConstants();
@@ -390,7 +337,7 @@ Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gr
     stats_.sweep_cells += m;
     return dense_->Evaluate(x, EnergyMode::kFull, with_gradient);
   }
-  return dense_->Assemble(x, false, with_gradient, energy, total.data(), nonfinite);
+  return dense_->Assemble(x, false, with_gradient, energy, sums.total.data(), sums.nonfinite);
 }
 
 void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
@@ -499,24 +446,28 @@ void BandEnergy::Adopt(const Eigen::VectorXd& x, bool variable, double energy) {
     for (std::int64_t a = 0; a < m; ++a)
       if (rank_[a] != kOutside) candidates_.push_back(a);
   }
-  Group(candidates_, &block_ids_, &block_offsets_);
-  if (!variable && dense_->storage() == LogLinearOptions::Storage::kOnTheFly) {
-    // Rows to keep, most used first: the band's, then the list's by radius.
-    std::vector<std::int64_t> order;
-    order.reserve(candidates_.size());
-    for (std::int64_t a : candidates_)
-      if (rank_[a] < 0) order.push_back(a);
-    for (std::int64_t id : list_cell_) {
-      if (id >= 0) order.push_back(id);
-      else blocks_->AppendCells(-id - 1, &order);
-    }
-    dense_->CacheRows(order);
-  }
+  block_offsets_ = Group(candidates_);
+  if (!variable && dense_->storage() == LogLinearOptions::Storage::kOnTheFly) KeepRows();
   anchor_cost_ = anchor_blocked_ ? std::int64_t(exact_.size()) + 2 * blocks_->count() : m;
   weights_version_ = ~std::uint64_t(0);  // constants follow the new band
   extra_ = 0;
   anchored_ = true;
   stats_.band_cells = band_count_;
+}
+
+void BandEnergy::KeepRows() {
+  // Most used first: the band's rows, the list's by radius, then those of the blocks the anchor
+  // could not prove saturated (every block sweep evaluates them).
+  row_order_.clear();
+  for (std::int64_t a : candidates_)
+    if (rank_[a] < 0) row_order_.push_back(a);
+  for (std::int64_t id : list_cell_) {
+    if (id >= 0) row_order_.push_back(id);
+    else blocks_->AppendCells(-id - 1, &row_order_);
+  }
+  std::vector<std::int64_t> rows = row_order_;
+  rows.insert(rows.end(), exact_.begin(), exact_.end());
+  dense_->CacheRows(rows);
 }
 
 void BandEnergy::UpdateConstants() {
@@ -559,7 +510,7 @@ Evaluation<double> BandEnergy::EvaluateOnce(const Eigen::VectorXd& x, bool with_
   const std::int64_t m = dense_->active_count();
   scratch_.resize(std::size_t(m));
   // The pending state is only read by Adopt, which follows a sweep of its own.
-  return BlockSweep(x, with_gradient);
+  return BlockSweep(x, with_gradient, false);
 }
 
 Evaluation<double> BandEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mode, bool with_gradient) {
@@ -617,15 +568,14 @@ Evaluation<double> BandEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMode mod
   extra_ += k_cells;
   if (weights_version_ != dense_->weights_version()) UpdateConstants();
 
-  Fixed energy = const_total_ - prefix_[std::size_t(k)];
-  std::vector<double> total;
-  std::int64_t nonfinite = 0;
-  SumCells(x, coeff.data(), variable, with_gradient, candidates_, block_ids_, block_offsets_, std::int32_t(k), false,
-           &energy, &total, &nonfinite);
+  const LogLinearEnergy::BlockSums sums = dense_->SumBlocks(
+      x, coeff.data(), variable, with_gradient, Blocks(candidates_, block_offsets_, std::int32_t(k)), nullptr, nullptr);
+  // The saturated cells' terms: all of them less those of the list items just evaluated.
+  const Fixed energy = const_total_ - prefix_[std::size_t(k)] + sums.energy;
   const long long exact = band_count_ + k_cells;
   stats_.exact_cells += exact;
   stats_.max_exact = std::max(stats_.max_exact, exact);
-  return finish(dense_->Assemble(x, variable, with_gradient, energy, total.data(), nonfinite));
+  return finish(dense_->Assemble(x, variable, with_gradient, energy, sums.total.data(), sums.nonfinite));
 }
 
 }  // namespace quijibo

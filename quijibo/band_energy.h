@@ -28,7 +28,7 @@
 // 4 (R+1) u ||v||_2 max_c N_c.
 //
 // Blocks (on-the-fly storage, where a dense sweep costs R logarithms per cell: the levels beyond
-// 97^3). The grid is cut into blocks of kBandBlockSide^3 cells. Take a block with centre p, whose
+// 97^3, and with storage kAuto any matrix over an eighth of the memory budget). The grid is cut into blocks of kBandBlockSide^3 cells. Take a block with centre p, whose
 // cell centres q = p + delta lie within h of p (delta in the slice), and a root at distance
 // d_j > h from p. Two bounds on how far L moves inside the block:
 //   first order in each root:  |D_qj - D_pj| <= e_j = -log(1 - h/d_j), so
@@ -42,8 +42,9 @@
 // bounded by N_B = sqrt(1 + sum_j (|D_pj| + e_j)^2) >= N_c, so it stays
 // saturated while d(x) <= r_B = slack / N_B, like a cell. An anchor then costs one pass over the
 // blocks (~4R operations each) plus the cells of the blocks it could not prove saturated, whose
-// rows the dense evaluator caches (LogLinearEnergy::CacheRows); the list's reach is capped by the
-// smallest r_B. Blocks with a root within h are never saturated; V passes (O(cells) per sweep) do
+// rows the dense evaluator caches with the band's and the list's (LogLinearEnergy::CacheRows: the
+// cache follows them as they move, ~1 GB for the bunny at 97^3 against 4.4 GB of matrix); the
+// list's reach is capped by the smallest r_B. Blocks with a root within h are never saturated; V passes (O(cells) per sweep) do
 // not use blocks.
 #pragma once
 
@@ -132,7 +133,9 @@ class BandEnergy {
   // An evaluation that records L (in scratch_) and the row norms: dense (the norms only the first
   // time) or, with blocks in full mode, over the blocks and the cells of the unproven ones.
   Evaluation<double> Sweep(const Eigen::VectorXd& x, bool variable, bool with_gradient);
-  Evaluation<double> BlockSweep(const Eigen::VectorXd& x, bool with_gradient);
+  // keep_rows: the dense evaluator keeps the rows the sweep evaluates (CacheRows), beside the
+  // anchor's; EvaluateOnce does not, so that isolated evaluations cost no memory.
+  Evaluation<double> BlockSweep(const Eigen::VectorXd& x, bool with_gradient, bool keep_rows);
   // Proves blocks saturated at x: sign (0: not proven) and radius r_B of each; returns the largest
   // N_B of the saturated blocks.
   double ScanBlocks(const Eigen::VectorXd& x, const double* coeff, std::vector<signed char>* sign,
@@ -141,17 +144,15 @@ class BandEnergy {
   void Adopt(const Eigen::VectorXd& x, bool variable, double energy);
   void UpdateConstants();
   void UpdateBlockConstants();
-  // Groups `cells` (ascending) by the dense evaluator's kEnergyBlock blocks.
-  static void Group(const std::vector<std::int64_t>& cells, std::vector<std::int64_t>* ids,
-                    std::vector<std::int64_t>* offsets);
-  // Evaluates the cells `cells` (grouped as by Group) whose rank_ is below `below` (all if
-  // `below` < 0): their
-  // exact energy sum, gradient totals (as LogLinearEnergy::Assemble takes them) and non-finite
-  // count; records L and, in full mode, the row norm into scratch_ and row_norm_ when `capture`.
-  void SumCells(const Eigen::VectorXd& x, const double* coeff, bool variable, bool with_gradient,
-                const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& ids,
-                const std::vector<std::int64_t>& offsets, std::int32_t below, bool capture,
-                loglinear::Fixed* energy, std::vector<double>* total, std::int64_t* nonfinite);
+  // On the fly: has the dense evaluator keep the anchor's rows (sets row_order_).
+  void KeepRows();
+  // Groups `cells` (ascending) by the dense evaluator's kEnergyBlock blocks: the offsets of
+  // CellBlocks.
+  static std::vector<std::int64_t> Group(const std::vector<std::int64_t>& cells);
+  // `cells` grouped as by Group (offsets) for LogLinearEnergy::SumBlocks, without the cells whose
+  // rank_ is `below` or more (all cells if `below` < 0).
+  LogLinearEnergy::CellBlocks Blocks(const std::vector<std::int64_t>& cells, const std::vector<std::int64_t>& offsets,
+                                     std::int32_t below) const;
   // ||v(x) - v(x0)||_2 and ||v(x)||_2 (see above).
   double Displacement(const Eigen::VectorXd& x, const double* coeff) const;
   double RoundingBound(const Eigen::VectorXd& x, const double* coeff) const;
@@ -172,7 +173,8 @@ class BandEnergy {
   std::vector<std::int64_t> list_cells_prefix_;  // cells in the first k items
   double list_cap_ = 0;                      // every cell beyond the list has r_c >= list_cap_
   std::vector<std::int64_t> candidates_;     // band and list cells, ascending
-  std::vector<std::int64_t> block_ids_, block_offsets_;  // kEnergyBlock blocks holding candidates
+  std::vector<std::int64_t> block_offsets_;  // candidates_ grouped by kEnergyBlock blocks
+  std::vector<std::int64_t> row_order_;      // on the fly: the anchor's candidates, most used first
   loglinear::Fixed const_total_ = 0;         // energy of all saturated (non-band) cells
   std::vector<loglinear::Fixed> prefix_;     // energy of the first k list items
   long long extra_ = 0;                      // list cells evaluated since the anchor

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "quijibo/error.h"
@@ -107,9 +108,13 @@ LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
   const std::int64_t m = std::int64_t(cells_.size());
   const int r = root_count();
   cache_budget_bytes_ = loglinear.memory_budget_bytes / 2;
-  if (storage_ == Storage::kAuto)
-    storage_ = double(m) * r * sizeof(double) <= loglinear.memory_budget_bytes ? Storage::kDouble
-                                                                                : Storage::kOnTheFly;
+  if (storage_ == Storage::kAuto) {
+    const double matrix = double(m) * r * sizeof(double);
+    const double stored_max = loglinear.band ? loglinear.memory_budget_bytes / 8 : loglinear.memory_budget_bytes;
+    storage_ = matrix <= stored_max ? Storage::kDouble : Storage::kOnTheFly;
+    // Not stored to save memory: the band's rows get what a stored matrix could have taken.
+    if (matrix <= loglinear.memory_budget_bytes) cache_budget_bytes_ = std::min(cache_budget_bytes_, stored_max);
+  }
   if (storage_ == Storage::kDouble || storage_ == Storage::kFloat) {
     if (storage_ == Storage::kDouble) d_double_.resize(std::size_t(m) * r);
     else d_float_.resize(std::size_t(m) * r);
@@ -150,32 +155,52 @@ void LogLinearEnergy::CacheRows(const std::vector<std::int64_t>& actives) const 
   if (storage_ != Storage::kOnTheFly) return;
   const int r = root_count();
   const std::size_t row_bytes = std::size_t(r) * sizeof(double);
+  const std::size_t cap = std::size_t(std::min(cache_budget_bytes_ / double(row_bytes),
+                                               double(std::numeric_limits<std::int32_t>::max() - 1)));
   if (row_slot_.empty()) row_slot_.assign(cells_.size(), -1);
-  std::vector<std::int64_t> missing;
-  for (std::int64_t a : actives)
-    if (row_slot_[std::size_t(a)] < 0) missing.push_back(a);
-  std::size_t rows = row_cache_.size() / std::size_t(r);
-  if (double(rows + missing.size()) * double(row_bytes) > cache_budget_bytes_) {
-    std::fill(row_slot_.begin(), row_slot_.end(), -1);
-    row_cache_.clear();
-    rows = 0;
-    const std::size_t fit = std::size_t(std::min(cache_budget_bytes_ / double(row_bytes),
-                                                 double(std::numeric_limits<std::int32_t>::max() - 1)));
-    missing.assign(actives.begin(), actives.begin() + std::min(actives.size(), fit));
+  // The distinct rows asked for, in order, as many as fit; `fresh`: those not kept yet. Afterwards
+  // the cache holds `wanted` <= cap rows and at most a third more not asked for.
+  std::vector<char> asked(cells_.size(), 0);
+  std::size_t wanted = 0;
+  std::vector<std::int64_t> fresh;
+  for (std::int64_t a : actives) {
+    if (wanted == cap) break;
+    if (asked[std::size_t(a)]) continue;
+    asked[std::size_t(a)] = 1;
+    ++wanted;
+    if (row_slot_[std::size_t(a)] < 0) fresh.push_back(a);
   }
-  if (missing.empty()) return;
-  // Duplicates in `actives` get one slot.
-  std::int64_t n = 0;
-  for (std::int64_t a : missing)
-    if (row_slot_[std::size_t(a)] < 0) {
-      row_slot_[std::size_t(a)] = std::int32_t(rows + std::size_t(n));
-      missing[std::size_t(n++)] = a;
+  std::size_t rows = row_cell_.size();
+  const std::size_t stale = rows - (wanted - fresh.size());
+  if (rows + fresh.size() > cap || (stale > 0 && 4 * stale > rows + fresh.size())) {
+    // Drop the rows not asked for, moving the others down in slot order (no second copy).
+    std::size_t next = 0;
+    for (std::size_t slot = 0; slot < rows; ++slot) {
+      const std::int64_t a = row_cell_[slot];
+      if (!asked[std::size_t(a)]) {
+        row_slot_[std::size_t(a)] = -1;
+        continue;
+      }
+      if (next != slot) std::memcpy(Slot(next), Slot(slot), row_bytes);  // next < slot: distinct rows
+      row_slot_[std::size_t(a)] = std::int32_t(next);
+      row_cell_[next++] = a;
     }
-  row_cache_.resize((rows + std::size_t(n)) * std::size_t(r));
+    rows = next;
+    row_cell_.resize(rows);
+  }
+  for (std::int64_t a : fresh) {
+    row_slot_[std::size_t(a)] = std::int32_t(row_cell_.size());
+    row_cell_.push_back(a);
+  }
+  const std::size_t chunks = (row_cell_.size() + kChunkRows - 1) / kChunkRows;
+  row_chunks_.resize(chunks);  // frees the chunks beyond
+  for (auto& chunk : row_chunks_)
+    if (!chunk) chunk = std::make_unique_for_overwrite<double[]>(kChunkRows * std::size_t(r));
+  const std::int64_t n = std::int64_t(fresh.size());
 #pragma omp parallel for schedule(static) if (n > kEnergyBlock)
   for (std::int64_t i = 0; i < n; ++i) {
-    const std::int64_t a = missing[std::size_t(i)];
-    Row(a, row_cache_.data() + std::size_t(row_slot_[std::size_t(a)]) * std::size_t(r));
+    const std::int64_t a = fresh[std::size_t(i)];
+    Row(a, Slot(std::size_t(row_slot_[std::size_t(a)])));
   }
 }
 
@@ -209,7 +234,7 @@ const double* LogLinearEnergy::RowOf(std::int64_t a, double* buffer) const {
     for (int j = 0; j < r; ++j) buffer[j] = d_float_[std::size_t(a) * r + j];
   } else {
     if (!row_slot_.empty() && row_slot_[std::size_t(a)] >= 0)
-      return row_cache_.data() + std::size_t(row_slot_[std::size_t(a)]) * std::size_t(r);
+      return Slot(std::size_t(row_slot_[std::size_t(a)]));
     Row(a, buffer);
   }
   return buffer;
@@ -267,20 +292,28 @@ Evaluation<double> LogLinearEnergy::Evaluate(const Eigen::VectorXd& x, EnergyMod
 
 Evaluation<double> LogLinearEnergy::EvaluateCapturing(const Eigen::VectorXd& x, EnergyMode mode, bool with_gradient,
                                                       double* L_active, double* row_norm) const {
-  using loglinear::Fixed;
   const auto start = std::chrono::steady_clock::now();
   CheckX(x);
   const bool variable = mode == EnergyMode::kVariable;
   if (variable && !variable_ready()) throw Error("energy: a V-pass evaluation needs BeginVariablePass first");
-  const std::int64_t m = std::int64_t(cells_.size());
+  std::vector<double> coeff(static_cast<std::size_t>(root_count()));
+  Coefficients(x, coeff.data());
+  const BlockSums sums = SumBlocks(x, coeff.data(), variable, with_gradient, AllCells(), L_active, row_norm);
+  Evaluation<double> ev = Assemble(x, variable, with_gradient, sums.energy, sums.total.data(), sums.nonfinite);
+  ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return ev;
+}
+
+LogLinearEnergy::BlockSums LogLinearEnergy::SumBlocks(const Eigen::VectorXd& x, const double* coeff, bool variable,
+                                                      bool with_gradient, const CellBlocks& blocks, double* L_active,
+                                                      double* row_norm) const {
+  using loglinear::Fixed;
+  const std::int64_t m = active_count();
   const int r = root_count();
   const double lnC = x[0], tau = x[1], beta = x[2], alpha = options_.alpha, scale = energy_scale_;
-  // L_c = ln C + sum_j coeff_j D_cj, coeff = [tau T, -beta B].
-  std::vector<double> coeff(r);
-  Coefficients(x, coeff.data());
-  // Block partials: [sum g, sum g S_T, sum g S_B] and, in full mode, G_r (from totals[3]).
+  // Block partials: [sum g, sum g S_T, sum g S_B] and, in full mode, G_r (from total[3]).
   const int nb_vals = 3 + (with_gradient && !variable ? r : 0);
-  const std::int64_t nblocks = (m + kEnergyBlock - 1) / kEnergyBlock;
+  const std::int64_t nblocks = blocks.count;
   std::vector<double> partial(std::size_t(nblocks * nb_vals), 0.0);
   std::vector<Fixed> block_energy(std::size_t(nblocks), 0);
   std::vector<std::int64_t> block_nonfinite(std::size_t(nblocks), 0);
@@ -288,21 +321,24 @@ Evaluation<double> LogLinearEnergy::EvaluateCapturing(const Eigen::VectorXd& x, 
   // One block needs no threads (and a busy machine makes waking them costly).
 #pragma omp parallel if (nblocks > 1)
   {
-    std::vector<double> buffer(r);
+    std::vector<double> buffer(static_cast<std::size_t>(r));
 #pragma omp for schedule(dynamic, 1)
     for (std::int64_t blk = 0; blk < nblocks; ++blk) {
       double* out = partial.data() + blk * nb_vals;
       Fixed energy = 0;
       std::int64_t nonfinite = 0;
-      const std::int64_t end = std::min(m, (blk + 1) * kEnergyBlock);
-      for (std::int64_t a = blk * kEnergyBlock; a < end; ++a) {
+      const std::int64_t begin = blocks.offsets ? blocks.offsets[blk] : blk * kEnergyBlock;
+      const std::int64_t end = blocks.offsets ? blocks.offsets[blk + 1] : std::min(m, (blk + 1) * kEnergyBlock);
+      for (std::int64_t i = begin; i < end; ++i) {
+        const std::int64_t a = blocks.cells ? blocks.cells[i] : i;
+        if (blocks.rank && blocks.rank[a] >= blocks.below) continue;
         const double* row = nullptr;
         double L;
         if (variable) {
           L = loglinear::VariableL(lnC, tau, beta, s_top_[a], s_bottom_[a]);
         } else {
           row = RowOf(a, buffer.data());
-          L = lnC + loglinear::Dot(coeff.data(), row, r);
+          L = lnC + loglinear::Dot(coeff, row, r);
           if (row_norm) {
             double n2 = 1.0;
 #pragma omp simd reduction(+ : n2)
@@ -328,17 +364,16 @@ Evaluation<double> LogLinearEnergy::EvaluateCapturing(const Eigen::VectorXd& x, 
     }
   }
 
-  std::vector<double> total(std::size_t(nb_vals), 0.0);
-  Fixed energy = 0;
-  std::int64_t nonfinite = 0;
+  // A dense block without evaluated cells adds exact zeros: the visited blocks' sums, in block
+  // order, are the dense totals.
+  BlockSums sums;
+  sums.total.assign(std::size_t(nb_vals), 0.0);
   for (std::int64_t b = 0; b < nblocks; ++b) {
-    for (int k = 0; k < nb_vals; ++k) total[k] += partial[std::size_t(b * nb_vals + k)];
-    energy += block_energy[b];
-    nonfinite += block_nonfinite[b];
+    for (int k = 0; k < nb_vals; ++k) sums.total[k] += partial[std::size_t(b * nb_vals + k)];
+    sums.energy += block_energy[b];
+    sums.nonfinite += block_nonfinite[b];
   }
-  Evaluation<double> ev = Assemble(x, variable, with_gradient, energy, total.data(), nonfinite);
-  ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return ev;
+  return sums;
 }
 
 Evaluation<double> LogLinearEnergy::Assemble(const Eigen::VectorXd& x, bool variable, bool with_gradient,

@@ -18,7 +18,8 @@
 //   kFloat    precomputed, 4 bytes; ~1e-7 relative error in D (not exact, opt-in)
 //   kOnTheFly recomputed at every evaluation, ~5x slower; the narrow band keeps the rows of the
 //             cells near the surface (CacheRows, within half the memory budget)
-//   kAuto     kDouble if it fits in memory_budget_bytes, else kOnTheFly
+//   kAuto     kDouble if it fits in memory_budget_bytes, else kOnTheFly; read through a narrow
+//             band, kDouble only up to an eighth of the budget (docs/benchmarks.md §8 "Memory")
 #pragma once
 
 #include <memory>
@@ -32,6 +33,13 @@ struct LogLinearOptions {
   enum class Storage { kAuto, kDouble, kFloat, kOnTheFly };
   Storage storage = Storage::kAuto;
   double memory_budget_bytes = 8.0e9;  // for kAuto (the bunny at 97^3 with 504 roots: 3.8 GB)
+  // The evaluator is read through a narrow band (band_energy.h), which evaluates a few % of the
+  // cells and keeps their rows. kAuto then stores the matrix only when it takes at most
+  // memory_budget_bytes / 8 (the coarse levels, where the band's blocks prove few cells saturated
+  // and a stored matrix is much faster), and otherwise keeps only the band's rows, within that
+  // eighth unless the matrix does not fit the budget at all (then half, as kOnTheFly): the bunny's
+  // 97^3 x 601 matrix (4.4 GB) becomes < 1 GB of rows at little cost in time.
+  bool band = false;
   std::string validate() const;
 };
 LogLinearOptions::Storage ParseStorage(const std::string& name);  // auto|double|float|on-the-fly
@@ -79,12 +87,14 @@ class LogLinearEnergy {
   // The D row of active cell a: a pointer into the matrix or the row cache, or `buffer`
   // (root_count() entries) filled.
   const double* RowOf(std::int64_t a, double* buffer) const;
-  // On-the-fly storage: computes and keeps the rows of the active cells `actives`, so that RowOf
-  // returns them without logarithms. The cache holds at most half the memory budget; a call that
-  // would pass it starts the cache afresh with as many of `actives`, from the first, as fit (so
-  // list them most used first). Other storages: nothing. Not to be called while RowOf runs.
+  // On-the-fly storage: keeps the rows of the active cells `actives` (duplicates allowed), so that
+  // RowOf returns them without logarithms: rows already kept stay, missing ones are computed.
+  // Rows that `actives` does not list are dropped once they would make up a quarter of the cache,
+  // so that it follows the band rather than accumulating. At most half the memory budget: beyond
+  // it, as many of `actives`, from the first, as fit (so list them most used first). Other
+  // storages: nothing. Not to be called while RowOf runs.
   void CacheRows(const std::vector<std::int64_t>& actives) const;
-  std::size_t cached_row_bytes() const { return row_cache_.size() * sizeof(double); }
+  std::size_t cached_row_bytes() const { return row_cell_.size() * std::size_t(root_count()) * sizeof(double); }
   // The grid and the roots (the band's blocks bound D from them).
   const GridFrame& frame() const { return frame_; }
   double slice() const { return slice_; }
@@ -97,6 +107,34 @@ class LogLinearEnergy {
   bool variable_ready() const { return s_top_.size() == cells_.size(); }
   // coeff = [tau T, -beta B] of x.
   void Coefficients(const Eigen::VectorXd& x, double* coeff) const;
+
+  // The cells a block sum visits. Block b holds positions offsets[b] .. offsets[b+1] (offsets
+  // null: b kEnergyBlock .. (b+1) kEnergyBlock, clipped to the active cells); position i is
+  // active cell cells[i] (cells null: i). With rank, cells whose rank is >= below are skipped
+  // (the band's provably saturated ones). Blocks are the dense evaluator's kEnergyBlock blocks,
+  // or subsets of them in cell order: that is what makes the sums agree bit for bit.
+  struct CellBlocks {
+    std::int64_t count = 0;
+    const std::int64_t* offsets = nullptr;
+    const std::int64_t* cells = nullptr;
+    const std::int32_t* rank = nullptr;
+    std::int32_t below = 0;
+  };
+  // Sums over the visited cells: the exact energy, the totals Assemble takes and the non-finite
+  // count.
+  struct BlockSums {
+    loglinear::Fixed energy = 0;
+    std::vector<double> total;
+    std::int64_t nonfinite = 0;
+  };
+  // The one cell loop of the dense evaluator and the band: per block and in cell order, L (from
+  // coeff = Coefficients(x), or the V-pass sums), tanh, the energy term and the gradient sums;
+  // then the blocks' sums in block order. Also writes L of each visited cell to L_active and, in
+  // full mode, sqrt(1 + sum_r D_cr^2) to row_norm (each if not null).
+  BlockSums SumBlocks(const Eigen::VectorXd& x, const double* coeff, bool variable, bool with_gradient,
+                      const CellBlocks& blocks, double* L_active, double* row_norm) const;
+  // All active cells in kEnergyBlock blocks (what a dense evaluation visits).
+  CellBlocks AllCells() const { return {(active_count() + kEnergyBlock - 1) / kEnergyBlock}; }
   void CheckX(const Eigen::VectorXd& x) const;
   // The evaluation from its sums: energy (in 1/energy_scale units) and, per mode, totals =
   // [sum g, sum g S_T, sum g S_B] (V pass) or [sum g, 0, 0, G_1..G_R] (full).
@@ -120,8 +158,15 @@ class LogLinearEnergy {
   std::vector<float> d_float_;
   std::vector<double> s_top_, s_bottom_;  // V-pass sums
   double cache_budget_bytes_ = 0;
-  mutable std::vector<std::int32_t> row_slot_;  // per active cell: its row in row_cache_, or -1
-  mutable std::vector<double> row_cache_;
+  // The row cache in chunks of kChunkRows rows: it grows and shrinks without copying itself, so
+  // its peak memory is its size.
+  static constexpr std::size_t kChunkRows = 256;
+  double* Slot(std::size_t slot) const {
+    return row_chunks_[slot / kChunkRows].get() + (slot % kChunkRows) * std::size_t(root_count());
+  }
+  mutable std::vector<std::int32_t> row_slot_;  // per active cell: its slot in the cache, or -1
+  mutable std::vector<std::int64_t> row_cell_;  // per slot: its active cell
+  mutable std::vector<std::unique_ptr<double[]>> row_chunks_;
   double energy_scale_ = 1;
   std::uint64_t weights_version_ = 0, variable_version_ = 0;
   double setup_seconds_ = 0;

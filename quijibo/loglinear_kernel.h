@@ -1,11 +1,13 @@
 // The per-cell arithmetic of the log-linear evaluator, shared by the dense evaluator
 // (loglinear_energy.h) and the narrow band (band_energy.h).
 //
-// Both call these same out-of-line functions, so a cell's L, tanh, gradient weight and energy term
-// are bit for bit the same whichever evaluator computes them. The energy is summed exactly (in a
-// 128-bit fixed-point accumulator, see EnergyFixed), so the sum does not depend on the order of
-// the cells; the gradient is summed per kEnergyBlock block in cell order. Together these make the
-// band's energy and gradient identical to the dense ones, not merely close.
+// Both sum their cells with one loop, LogLinearEnergy::SumBlocks, which calls these out-of-line
+// functions; the band's saturated cells' constant terms and LogModulus call them too, so a cell's
+// L, tanh, gradient weight and energy term are bit for bit the same wherever they are computed.
+// The energy is summed exactly (in a 128-bit fixed-point accumulator, see EnergyFixed), so the sum
+// does not depend on the order of the cells; the gradient is summed per kEnergyBlock block in cell
+// order. Together these make the band's energy and gradient identical to the dense ones, not
+// merely close.
 #pragma once
 
 #include <cstdint>

@@ -159,6 +159,79 @@ TEST(BandEnergyTest, BlocksMatchDenseAlongMoves) {
   CheckAlongMoves(26, lo);
 }
 
+TEST(BandEnergyTest, RowCacheFollowsTheRequests) {
+  // CacheRows keeps the rows asked for, with the values Row computes, and drops the others once
+  // they would make up a quarter of the cache: it follows the band rather than accumulating.
+  const BandProblem p = MakeBandProblem(16, 6, 5, 1.0, 2.0, 3);
+  LogLinearOptions lo;
+  lo.storage = LogLinearOptions::Storage::kOnTheFly;
+  const LogLinearEnergy dense(p.map, p.grid, {}, lo);
+  lo.storage = LogLinearOptions::Storage::kDouble;
+  const LogLinearEnergy stored(p.map, p.grid, {}, lo);
+  const int r = dense.root_count();
+  const std::size_t row_bytes = std::size_t(r) * sizeof(double);
+  const std::int64_t m = dense.active_count(), quarter = m / 4, shift = m / 40;
+  auto range = [](std::int64_t from, std::int64_t count) {
+    std::vector<std::int64_t> v;
+    for (std::int64_t a = from; a < from + count; ++a) v.push_back(a);
+    return v;
+  };
+  std::vector<double> buffer(static_cast<std::size_t>(r)), reference(static_cast<std::size_t>(r));
+  auto expect_cached = [&](const std::vector<std::int64_t>& actives) {
+    for (std::int64_t a : actives) {
+      const double* row = dense.RowOf(a, buffer.data());
+      ASSERT_NE(row, buffer.data()) << a;
+      const double* want = stored.RowOf(a, reference.data());
+      for (int j = 0; j < r; ++j) ASSERT_EQ(row[j], want[j]) << a << " root " << j;
+    }
+  };
+  std::vector<std::int64_t> first = range(0, quarter);
+  first.push_back(0);  // duplicates get one row
+  dense.CacheRows(first);
+  EXPECT_EQ(dense.cached_row_bytes(), std::size_t(quarter) * row_bytes);
+  expect_cached(first);
+  // A shifted request: few rows go stale, so they stay.
+  dense.CacheRows(range(shift, quarter));
+  EXPECT_EQ(dense.cached_row_bytes(), std::size_t(quarter + shift) * row_bytes);
+  // A request elsewhere: the old rows are dropped, the kept ones moved and still right.
+  const std::vector<std::int64_t> elsewhere = range(quarter, quarter);
+  dense.CacheRows(elsewhere);
+  EXPECT_EQ(dense.cached_row_bytes(), std::size_t(quarter) * row_bytes);
+  expect_cached(elsewhere);
+  EXPECT_EQ(dense.RowOf(0, buffer.data()), buffer.data());  // dropped: computed
+  // Half the budget holds 10 rows: the first 10 asked for.
+  lo.storage = LogLinearOptions::Storage::kOnTheFly;
+  lo.memory_budget_bytes = double(20 * row_bytes);
+  const LogLinearEnergy small(p.map, p.grid, {}, lo);
+  small.CacheRows(range(5, 30));
+  EXPECT_EQ(small.cached_row_bytes(), 10 * row_bytes);
+  EXPECT_NE(small.RowOf(14, buffer.data()), buffer.data());
+  EXPECT_EQ(small.RowOf(15, buffer.data()), buffer.data());
+}
+
+TEST(BandEnergyTest, AutoStorageKeepsOnlyTheBandsRowsOfLargeMatrices) {
+  // Read through a band, kAuto stores the matrix only up to an eighth of the budget.
+  const BandProblem p = MakeBandProblem(12, 6, 5, 1.0, 2.0, 3);
+  LogLinearOptions lo;
+  lo.storage = LogLinearOptions::Storage::kDouble;
+  const double bytes = double(LogLinearEnergy(p.map, p.grid, {}, lo).matrix_bytes());
+  ASSERT_GT(bytes, 0);
+  lo.storage = LogLinearOptions::Storage::kAuto;
+  for (double budget : {bytes * 4, bytes * 8}) {
+    lo.memory_budget_bytes = budget;
+    lo.band = false;
+    EXPECT_EQ(LogLinearEnergy(p.map, p.grid, {}, lo).storage(), LogLinearOptions::Storage::kDouble);
+    lo.band = true;
+    const LogLinearEnergy banded(p.map, p.grid, {}, lo);
+    EXPECT_EQ(banded.storage(), budget < bytes * 8 ? LogLinearOptions::Storage::kOnTheFly
+                                                   : LogLinearOptions::Storage::kDouble);
+    EXPECT_EQ(banded.matrix_bytes(), budget < bytes * 8 ? 0 : std::size_t(bytes));
+  }
+  lo.memory_budget_bytes = bytes / 2;  // does not fit at all
+  lo.band = false;
+  EXPECT_EQ(LogLinearEnergy(p.map, p.grid, {}, lo).storage(), LogLinearOptions::Storage::kOnTheFly);
+}
+
 TEST(BandEnergyTest, BlockBoundsHoldForEveryCell) {
   // The premise of a block anchor: every cell's D is within e_j of the block centre's, within q_j
   // of its first-order Taylor expansion about the centre, and its row norm within N_B.
