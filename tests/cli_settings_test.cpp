@@ -1,7 +1,7 @@
 // The command line agrees with the schemas (quijibo/settings.h): every option bound to a setting
 // shows the setting's default and accepts exactly its range and choices, and every command's target
 // grid resolution is the experiment's. The options are checked on the app `quijibo` parses, with
-// the commands' callbacks removed, so a value is judged by CLI11's validation alone.
+// a required option never given, so a value is judged by CLI11's validation alone and no command runs.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -18,9 +18,13 @@ namespace {
 
 using nlohmann::json;
 
-void RemoveCallbacks(CLI::App* app) {
-  app->callback(std::function<void()>());
-  for (CLI::App* sub : app->get_subcommands([](CLI::App*) { return true; })) RemoveCallbacks(sub);
+// A required option on every command, never given: CLI11 checks requirements after it has run the
+// options' validators and callbacks and before the command's own callback, so a parse is judged
+// and no command runs. (Removing the callbacks instead would free the state they own while the
+// options' callbacks still write into it.)
+void StopBeforeRunning(CLI::App* app) {
+  app->add_flag("--test-stop-before-running")->required();
+  for (CLI::App* sub : app->get_subcommands([](CLI::App*) { return true; })) StopBeforeRunning(sub);
 }
 
 // True when `quijibo <command> <args>` is refused for an option's value (a range or a choice),
@@ -28,7 +32,7 @@ void RemoveCallbacks(CLI::App* app) {
 bool Refused(const std::string& command, const std::string& args) {
   CLI::App app;
   AddCommands(app);
-  RemoveCallbacks(&app);
+  StopBeforeRunning(&app);
   try {
     app.parse(command + " " + args, false);
   } catch (const CLI::ValidationError&) {
