@@ -9,6 +9,7 @@
 
 #include "mesh/sdf.h"
 #include "quijibo/error.h"
+#include "quijibo/iou.h"
 
 namespace quijibo::mesh {
 
@@ -142,7 +143,7 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
   auto figures = [&](std::int64_t set, std::int64_t inter, std::int64_t uni, std::int64_t leak) {
     SetFigures s;
     s.set_nodes = set, s.leak_nodes = leak;
-    s.iou = uni ? double(inter) / double(uni) : 0;
+    s.iou = IntersectionOverUnion(inter, uni);
     s.leak = inside ? double(leak) / double(inside) : 0;
     return s;
   };
@@ -152,7 +153,7 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
     const std::vector<char> closed = Close(in_set, n, o.closing);
     std::int64_t inter = 0, uni = 0;
     for (std::size_t c = 0; c < closed.size(); ++c) inter += closed[c] && in_target[c], uni += closed[c] || in_target[c];
-    f.n_step_closed_iou = uni ? double(inter) / double(uni) : 0;
+    f.n_step_closed_iou = IntersectionOverUnion(inter, uni);
   }
   return f;
 }

@@ -10,6 +10,7 @@
 
 #include "monopole/sampling.h"
 #include "quijibo/error.h"
+#include "quijibo/iou.h"
 
 namespace quijibo::monopole {
 
@@ -389,7 +390,7 @@ StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alph
   StartCheck check;
   check.median_inside = median(in);
   check.median_outside = median(out);
-  check.iou = uni ? double(inter) / double(uni) : 0;
+  check.iou = IntersectionOverUnion(inter, uni);
   check.saturated = n ? double(saturated) / double(n) : 0;
   check.inverted = !(check.median_inside < check.median_outside);
   return check;

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "quijibo/error.h"
+#include "quijibo/iou.h"
 
 namespace quijibo {
 
@@ -249,7 +250,7 @@ double LevelFidelity(const EnergyGrid& finest, const EnergyGrid& level) {
         both += in_f && in_l;
         either += in_f || in_l;
       }
-  return either > 0 ? double(both) / double(either) : 1.0;
+  return IntersectionOverUnion(both, either);
 }
 
 int ResolvedLevelResolution(const ScalarGrid& sdf, const std::vector<double>& finest_weight, WeightField field,

@@ -16,6 +16,7 @@
 #include "quijibo/energy.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
+#include "quijibo/iou.h"
 #include "quijibo/json_reader.h"
 #include "quijibo/mask.h"
 #include "quijibo/target.h"
@@ -121,7 +122,7 @@ CompareResult Compare(const CompareOptions& o) {
       both += a1 && b1;
       either += a1 || b1;
     }
-    return either ? double(both) / double(either) : 0.0;
+    return IntersectionOverUnion(both, either);
   };
   // Meshes over the grid's box, in the fractal frame.
   mesh::MeshingOptions mo;

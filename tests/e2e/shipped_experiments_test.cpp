@@ -4,6 +4,7 @@
 // optimizer run with its evaluator, precision and schedule of levels and passes, mesh, pictures,
 // plot) unchanged. So every stage of every method in what we ship runs in CI.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -113,7 +114,9 @@ class ShippedExperiment : public ::testing::TestWithParam<std::string> {};
 TEST_P(ShippedExperiment, ChecksAndRunsEveryStageAtASmallScale) {
   const std::string name = GetParam();
   const std::string source = std::string(QUIJIBO_SOURCE_DIR) + "/experiments/" + name + ".json";
-  const std::string dir = (fs::temp_directory_path() / ("quijibo_shipped_" + name)).string();
+  // Per process: runs of the suite side by side (two build trees) must not share a folder.
+  const std::string dir =
+      (fs::temp_directory_path() / ("quijibo_shipped_" + name + "_" + std::to_string(::getpid()))).string();
   fs::remove_all(dir);
   fs::create_directories(dir);
   // The shipped file validates as it is.

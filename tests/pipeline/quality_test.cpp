@@ -10,6 +10,7 @@
 #include "experiments/pipeline/quality.h"
 #include "monopole/kernel_fit.h"
 #include "quijibo/grid.h"
+#include "quijibo/iou.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo::pipeline {
@@ -93,6 +94,13 @@ TEST(Quality, MeasureQualityGivesTheChosenMapsIoUOnTheTargetGrid) {
   EXPECT_GT(start, 0.9);
   EXPECT_LT(optimized, 0.6);  // (1 / 1.3)^3 = 0.455 of the larger ball is the sphere
   EXPECT_EQ(j["target_grid"]["resolution"], 24);
+}
+
+// One IoU for every figure: two empty sets are the same set.
+TEST(Quality, IntersectionOverUnionHasOneConventionForEmptySets) {
+  EXPECT_EQ(IntersectionOverUnion(0, 0), 1.0);
+  EXPECT_EQ(IntersectionOverUnion(0, 5), 0.0);
+  EXPECT_EQ(IntersectionOverUnion(3, 4), 0.75);
 }
 
 }  // namespace
