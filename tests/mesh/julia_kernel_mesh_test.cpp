@@ -11,30 +11,11 @@
 namespace quijibo::mesh {
 namespace {
 
-// The map of julia_mesh_test.cpp (its set at n = 1 contains the origin), with or without roots at
-// the origin.
-RationalMap KernelTestMap(bool zero_roots) {
-  RandomMapOptions o;
-  o.top = 12;
-  o.bottom = 9;
-  o.root_radius = 1.2;
-  o.exponent_min = 0.3;
-  o.exponent_max = 1.2;
-  o.leading_zero_roots = zero_roots;
-  o.seed = 4;
-  RationalMap m = RandomMap(o);
-  m.ln_C = 0;
-  JuliaOptions j;
-  j.iterations = 1;
-  m.ln_C = -1.0 - JuliaMap<double>(m, j).At({0, 0, 0}).log_modulus;
-  return m;
-}
-
 class JuliaKernelMesh : public ::testing::TestWithParam<std::tuple<int, int>> {};
 
 TEST_P(JuliaKernelMesh, VectorAndScalarKernelsGiveTheSameMesh) {
   const auto [iterations, variant] = GetParam();
-  const RationalMap map = KernelTestMap(variant == 1);
+  const RationalMap map = testing::SmallSetMap(variant == 1);
   JuliaOptions j;
   j.iterations = iterations;
   if (variant == 2) {

@@ -14,23 +14,6 @@
 namespace quijibo::mesh {
 namespace {
 
-// A small random map whose set at n = 1 contains the origin: ln C puts L(0) at -1.
-RationalMap SmallMap() {
-  RandomMapOptions o;
-  o.top = 12;
-  o.bottom = 9;
-  o.root_radius = 1.2;
-  o.exponent_min = 0.3;
-  o.exponent_max = 1.2;
-  o.seed = 4;
-  RationalMap m = RandomMap(o);
-  m.ln_C = 0;
-  JuliaOptions j;
-  j.iterations = 1;
-  m.ln_C = -1.0 - JuliaMap<double>(m, j).At({0, 0, 0}).log_modulus;
-  return m;
-}
-
 using testing::Canonical;
 
 // n = 3 and 4 have specks smaller than a cell next to the surface, which a search on corner signs
@@ -39,7 +22,7 @@ class JuliaMeshIterations : public ::testing::TestWithParam<std::tuple<int, int>
 
 TEST_P(JuliaMeshIterations, DenseAndSparseAgreeAndThreadsDoNotMatter) {
   const auto [iterations, search_stride] = GetParam();
-  const RationalMap map = SmallMap();
+  const RationalMap map = testing::SmallSetMap();
   JuliaOptions j;
   j.iterations = iterations;
   JuliaFieldStats stats;
@@ -100,7 +83,7 @@ INSTANTIATE_TEST_SUITE_P(JuliaMesh, JuliaMeshIterations,
                          ::testing::Combine(::testing::Values(2, 3, 4), ::testing::Values(4, 8)));
 
 TEST(JuliaMesh, PicturesHaveTheRightSizeAndColours) {
-  const RationalMap map = SmallMap();
+  const RationalMap map = testing::SmallSetMap();
   JuliaOptions j;
   j.iterations = 1;
   SliceView v;

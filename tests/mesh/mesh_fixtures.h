@@ -16,6 +16,8 @@
 
 #include "mesh/marching_cubes.h"
 #include "mesh/triangle_mesh.h"
+#include "quijibo/julia.h"
+#include "quijibo/rational_map.h"
 
 namespace quijibo::testing {
 
@@ -110,6 +112,25 @@ inline std::multiset<std::array<Vec3, 3>> Canonical(const mesh::TriangleMesh& m)
     s.insert(p);
   }
   return s;
+}
+
+// A small random map (12 top, 9 bottom roots) whose set at n = 1 contains the origin: ln C puts
+// L(0) at -1; with or without roots at the origin.
+inline RationalMap SmallSetMap(bool zero_roots = false) {
+  RandomMapOptions o;
+  o.top = 12;
+  o.bottom = 9;
+  o.root_radius = 1.2;
+  o.exponent_min = 0.3;
+  o.exponent_max = 1.2;
+  o.leading_zero_roots = zero_roots;
+  o.seed = 4;
+  RationalMap m = RandomMap(o);
+  m.ln_C = 0;
+  JuliaOptions j;
+  j.iterations = 1;
+  m.ln_C = -1.0 - JuliaMap<double>(m, j).At({0, 0, 0}).log_modulus;
+  return m;
 }
 
 }  // namespace quijibo::testing
