@@ -19,10 +19,11 @@ constexpr double kRadius = 5.0;
 const Vec3 kCentre{3.0, -2.0, 7.0};
 constexpr int kRes = 20;
 
-std::string SphereObj() {
-  const auto path = std::filesystem::temp_directory_path() / "quijibo_authors_frame_sphere.obj";
-  mesh::WriteObj(path.string(), testing::Icosphere(3, kCentre, kRadius));
-  return path.string();
+// Written into the test's own folder: ctest runs the tests of this file in parallel.
+std::string SphereObj(const testing::TempDir& dir) {
+  const std::string path = dir.file("sphere.obj");
+  mesh::WriteObj(path, testing::Icosphere(3, kCentre, kRadius));
+  return path;
 }
 
 double ExpectedScale() {
@@ -33,7 +34,8 @@ double ExpectedScale() {
 }
 
 TEST(AuthorsFrameUnits, TheStageConvertsTheirAlphaAndBetaAndAssumesResNodes) {
-  const std::string obj = SphereObj();
+  const testing::TempDir dir;
+  const std::string obj = SphereObj(dir);
   const double s = ExpectedScale();
   ModulusStageOptions o;
   o.sdf_resolution = kRes;
@@ -58,7 +60,6 @@ TEST(AuthorsFrameUnits, TheStageConvertsTheirAlphaAndBetaAndAssumesResNodes) {
   o.authors_frame = {kRes};
   o.two_d = true;
   EXPECT_THROW(Modulus(obj, o, "unused.png"), Error);
-  std::filesystem::remove(obj);
 }
 
 // Their modulus, computed independently: the reader's position p is the point
@@ -67,7 +68,8 @@ TEST(AuthorsFrameUnits, TheStageConvertsTheirAlphaAndBetaAndAssumesResNodes) {
 // log-modulus is a (d - b). The converted map must give it (within the SDF's sampling error), and
 // the conversion must equal passing a / s and -b s directly.
 TEST(AuthorsFrameUnits, ConvertedParametersGiveTheirModulus) {
-  const std::string obj = SphereObj();
+  const testing::TempDir dir;
+  const std::string obj = SphereObj(dir);
   mesh::LoadedTarget lt = mesh::LoadModulusTarget(obj, kRes);
   const double s = ExpectedScale();
   ASSERT_NEAR(lt.unit_per_source, s, 1e-12);
@@ -105,7 +107,6 @@ TEST(AuthorsFrameUnits, ConvertedParametersGiveTheirModulus) {
         ++checked;
       }
   EXPECT_GT(checked, 500);
-  std::filesystem::remove(obj);
 }
 
 // Fields convert value by value (the blend is affine in the values), masks untouched.
