@@ -125,7 +125,7 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
               "A surface that does not cross the box is a result, not an error: write the summary (0 "
               "triangles) and no mesh files");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
-  a->j.add(c, {"resolution", "iterations", "escape", "iso", "iteration_frame", "detail", "frame", "precision", "kernel"});
+  a->j.add(c, {"resolution", "iterations", "escape", "capture", "iso", "iteration_frame", "detail", "frame", "precision", "kernel"});
   c->callback([a, mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
     // The output names first; their folders are created when the mesh is ready to be written.
@@ -195,7 +195,7 @@ void AddPicture(CLI::App& app) {
   add_view(sc, *s);
   BindSettings(sc, s->pics, {"slice_iterations", "slice_size"});
   sc->add_option("--box", s->box, "Picture box (fractal frame), default the target's grid box");
-  s->j.add(sc, {"escape", "iso", "precision"});
+  s->j.add(sc, {"escape", "capture", "iso", "precision"});
   sc->callback([s] {
     CheckPng(s->out);
     const RationalMap map = ReadMap(s->map);
@@ -224,7 +224,7 @@ void AddPicture(CLI::App& app) {
   BindSettings(fc, f->pics, {"slice_size"});
   fc->add_option("--box", f->box, "Picture box (fractal frame), default the normalized cube, box centre +-fractal_radius/2");
   fc->add_option("--modulus-scale", f->modulus_scale, "Grey = 0.5 + 0.5 tanh((log|q_n| - iso) / scale); 0: automatic")->capture_default_str();
-  f->j.add(fc, {"iterations", "escape", "iso", "precision"});
+  f->j.add(fc, {"iterations", "escape", "capture", "iso", "precision"});
   fc->callback([f] {
     CheckPng(f->out);
     const RationalMap map = ReadMap(f->map);

@@ -1,6 +1,7 @@
 #include "quijibo/julia.h"
 
 #include <cmath>
+#include <limits>
 
 #include "quijibo/error.h"
 
@@ -23,6 +24,7 @@ SampleTransform SampleTransform::AxisAngle(const Vec3& axis, double degrees, con
 std::string JuliaOptions::validate() const {
   if (iterations < 1 || iterations > 1000) return "iterations must be in [1, 1000]";
   if (!(escape_radius > 1.0) || !std::isfinite(escape_radius)) return "escape radius must be finite and > 1";
+  if (!(capture_radius >= 0.0 && capture_radius <= 1.0)) return "capture radius must be in [0, 1]";
   if (!std::isfinite(slice)) return "slice must be finite";
   for (double t : root_translation)
     if (!std::isfinite(t)) return "root translation must be finite";
@@ -57,6 +59,7 @@ JuliaMap<Real>::JuliaMap(const RationalMap& map, const JuliaOptions& options) : 
   ln_C_ = Real(map.ln_C);
   using std::log;
   log_escape_ = log(Real(options.escape_radius));
+  log_capture_ = options.capture_radius > 0 ? log(Real(options.capture_radius)) : -std::numeric_limits<Real>::infinity();
 }
 
 template <class Real>
@@ -147,6 +150,7 @@ JuliaResult<Real> JuliaMap<Real>::Iterate(const Quaternion<Real>& q0) const {
   r.versor = n0 > Real(0) ? q0 * (Real(1) / n0) : Quaternion<Real>(Real(1), Real(0), Real(0), Real(0));
   for (int k = 0; k < options_.iterations; ++k) {
     if (!(r.log_modulus < log_escape_)) break;  // escaped (or NaN)
+    if (k > 0 && r.log_modulus < log_capture_) break;  // captured (the start itself is not)
     Apply(q, r.log_modulus, r.versor, r.log_modulus, r.versor);
     ++r.iterations;
     if (r.log_modulus < log_escape_) q = r.versor * exp(r.log_modulus);
@@ -166,6 +170,7 @@ JuliaResult<Real> JuliaMap<Real>::IterateDirect(const Quaternion<Real>& q0) cons
   const Real eC = exp(ln_C_);
   for (int k = 0; k < options_.iterations; ++k) {
     if (!(sqrt(q.norm2()) < escape)) break;
+    if (k > 0 && sqrt(q.norm2()) < Real(options_.capture_radius)) break;
     Quaternion<Real> T(Real(1), Real(0), Real(0), Real(0)), B = T, lg, p;
     for (std::size_t i = 0; i < top_.size(); ++i) {
       LogAndPower(q - top_[i], top_exp_[i], lg, p);

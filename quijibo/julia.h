@@ -62,6 +62,11 @@ struct SampleTransform {
 struct JuliaOptions {
   int iterations = 4;             // n
   double escape_radius = 2000.0;  // reference TRIANGLE_MESH::_escapeRadius
+  // An iterate with |q| below this is captured: it stops and counts as inside (log|q| < 0).
+  // 0 is a super-attracting fixed point of an untranslated map, so there this changes no set; a
+  // translated map moves its roots off 0, and the reference's bail-out (10 FLT_MIN) is what keeps
+  // the deep inside of a steep map in the set (docs/meshing.md "Root translation").
+  double capture_radius = 0.0;
   double slice = 0.0;             // S
   Vec4 root_translation{0.0, 0.0, 0.0, 0.0};
   double root_scale = 1.0;
@@ -113,13 +118,14 @@ class JuliaMap {
   std::vector<Factor> Factors() const;
   const Real& ln_C() const { return ln_C_; }
   const Real& log_escape() const { return log_escape_; }
+  const Real& log_capture() const { return log_capture_; }  // -inf when capture is off
 
  private:
   JuliaOptions options_;
   std::vector<Quaternion<Real>> top_, bottom_;  // translated and scaled roots
   std::vector<Real> top_exp_, bottom_exp_;      // tau T_i, beta B_i
   std::vector<char> top_zero_, bottom_zero_;    // root exactly at the origin
-  Real ln_C_{0}, log_escape_{0};
+  Real ln_C_{0}, log_escape_{0}, log_capture_{0};
 };
 
 extern template class JuliaMap<float>;

@@ -136,6 +136,7 @@ JuliaBatch::JuliaBatch(const RationalMap& map, const JuliaOptions& options, bool
   }
   ln_C_ = scalar_.ln_C();
   log_escape_ = scalar_.log_escape();
+  log_capture_ = scalar_.log_capture();
   iterations_ = options.iterations;
   static const bool has_avx2 = CpuHasAvx2();
   avx2_ = allow_avx2 && has_avx2;
@@ -159,7 +160,8 @@ void JuliaBatch::Iterate(const Quaternion<double>* q0, std::size_t n, JuliaResul
   for (int k = 0; k < iterations_; ++k) {
     active.clear();
     for (std::size_t i = 0; i < n; ++i)
-      if (out[i].log_modulus < log_escape_) active.push_back(i);  // not escaped, not NaN
+      if (out[i].log_modulus < log_escape_ && (k == 0 || !(out[i].log_modulus < log_capture_)))
+        active.push_back(i);  // not escaped, not captured (the start itself is not), not NaN
     for (std::size_t b = 0; b < active.size(); b += C) {
       const std::size_t lanes = std::min<std::size_t>(C, active.size() - b);
       for (int l = 0; l < C; ++l) {  // a partial chunk repeats its last node

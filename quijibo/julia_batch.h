@@ -56,7 +56,7 @@ class JuliaBatch {
   // The factors in Apply's order, one array per component (roots at the origin: 0).
   std::vector<double> root_w_, root_x_, root_y_, root_z_, exponent_;
   std::vector<char> zero_;
-  double ln_C_ = 0, log_escape_ = 0;
+  double ln_C_ = 0, log_escape_ = 0, log_capture_ = 0;
   int iterations_ = 0;
   bool avx2_ = false;
 };

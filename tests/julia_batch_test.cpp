@@ -73,6 +73,10 @@ std::vector<BatchCase> BatchCases() {
       {"placement_n4", 12, 9, false,
        BatchOptions(4, [](JuliaOptions& o) { o.placement = SampleTransform::AxisAngle({1, 2, 3}, 37, {0.1, 0.2, -0.3}); })},
       {"escape_5_n6", 12, 9, false, BatchOptions(6, [](JuliaOptions& o) { o.escape_radius = 5; })},
+      {"capture_translation_n4", 12, 9, false, BatchOptions(4, [](JuliaOptions& o) {
+         o.root_translation = {0, 0, 0.6, 0};
+         o.capture_radius = 0.3;
+       })},
       {"many_roots_n4", 300, 200, true, BatchOptions(4, none)},
   };
 }

@@ -157,6 +157,49 @@ TEST(Julia, RootTranslationChangesNothingForOneIteration) {
   EXPECT_GT(differ, 10);
 }
 
+// The reference's bail-out at |q| < 10 FLT_MIN, as an option. One steep top root at the origin:
+// L = 40 log|q|, the one-step set the unit ball. Translated by t = (0, 0, 1.5), every point of the
+// ball is sent within |R| of -t, outside the ball, and escapes at the next step; with a capture
+// radius the deep inside stops there and stays in the set.
+TEST(Julia, ACaptureRadiusKeepsTheDeepInsideOfATranslatedSteepMap) {
+  RationalMap m;
+  m.top_roots = {{0, 0, 0, 0}};
+  m.top_exponents = {40.0};
+  m.bottom_roots = {{2.9, 0, 0, 0}};
+  m.bottom_exponents = {1e-9};
+  JuliaOptions o;
+  o.iterations = 4;
+  o.root_translation = {0, 0, 1.5, 0};
+  const JuliaMap<double> free(m, o);
+  o.capture_radius = 1e-10;
+  const JuliaMap<double> captured(m, o);
+  const Vec3 deep{0.5, 0, 0}, shallow{0.0, 0.9, 0}, outside{0.0, 0, 1.1};  // |q_1| = 0.5^40, 0.9^40, 1.1^40
+  EXPECT_TRUE(free.At(deep).escaped);
+  const JuliaResult<double> d = captured.At(deep);
+  EXPECT_FALSE(d.escaped);
+  EXPECT_EQ(d.iterations, 1);
+  EXPECT_NEAR(d.log_modulus, 40 * std::log(0.5), 1e-9);
+  EXPECT_TRUE(captured.At(shallow).escaped);  // |q_1| = 0.015 > 1e-10: iterated on, and out
+  EXPECT_TRUE(captured.At(outside).escaped);
+  // The direct products stop at the same point.
+  EXPECT_EQ(captured.IterateDirect(captured.StartingPoint(deep)).iterations, 1);
+  // A start inside the capture ball is still iterated (only iterates are captured).
+  EXPECT_EQ(captured.At({0, 0, -1.5}).iterations, 1);
+  // Untranslated, 0 is a super-attracting fixed point: capturing changes no point's fate.
+  o.root_translation = {0, 0, 0, 0};
+  o.capture_radius = 1.1754944e-37;
+  const JuliaMap<double> plain_c(m, o);
+  o.capture_radius = 0;
+  const JuliaMap<double> plain(m, o);
+  for (const Vec3& p : Points(300, 21)) EXPECT_EQ(plain_c.At(p).escaped, plain.At(p).escaped);
+  o.capture_radius = -1;
+  EXPECT_THROW(JuliaMap<double>(m, o), Error);
+  o.capture_radius = 2;
+  EXPECT_THROW(JuliaMap<double>(m, o), Error);
+  o.capture_radius = std::nan("");
+  EXPECT_THROW(JuliaMap<double>(m, o), Error);
+}
+
 TEST(Julia, AFrameChangeKeepsTheOneStepSetOfEveryUserPoint) {
   RationalMap map = SmallMap();
   map.frame.scale = 0.3, map.frame.translation = {0.1, 0.2, 0.05}, map.frame.origin = {0.45, 0.52, 0.6};

@@ -54,6 +54,14 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
               "escape", "--escape", "Escape radius (reference: 2000)",
               [](auto& o) -> double& { return o.julia.escape_radius; }, 1.0, 1e300, true)
           .Number(
+              "capture", "--capture",
+              "Capture radius: an iterate with |q| below it stops and counts as inside (reference: 1.2e-37, "
+              "10 FLT_MIN; 0: off); matters only with --translate",
+              [](auto& o) -> double& { return o.julia.capture_radius; }, 0.0, 1.0, false)
+          .Doc("capture radius: an iterate with |q| below it stops and counts as inside (the reference's "
+               "bail-out, 10 FLT_MIN = 1.2e-37; 0 off); changes only translated sets ([meshing.md](meshing.md) "
+               "\"Root translation\")")
+          .Number(
               "iso", "--iso", "Iso value of log|q_n| (reference: 0)", [](auto& o) -> double& { return o.iso; }, -1e6,
               1e6)
           .Doc("the surface log|q_n| = iso")
