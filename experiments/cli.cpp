@@ -7,6 +7,7 @@
 
 #include "experiments/bind.h"
 #include "experiments/pipeline/energy.h"
+#include "experiments/pipeline/target.h"
 #include "mesh/sdf_command.h"
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
@@ -20,11 +21,17 @@ using nlohmann::json;
 ScalarGrid LoadTarget(const std::string& spec, int resolution) {
   const bool looks_like_file = spec.find('/') != std::string::npos ||
                                spec.ends_with(".qgrid") || std::filesystem::exists(spec);
-  if (looks_like_file) return ReadGrid(spec);
-  if (auto why = CheckRange("--target-resolution", SettingType::kInteger, resolution, kTargetResolutionRange);
-      !why.empty())
-    throw Error(why);
-  return AnalyticTarget(spec, TargetGridFrame(resolution, FractalFrame{}));
+  pipeline::TargetOptions o;
+  if (looks_like_file) {
+    o.qgrid = spec;
+  } else {
+    if (auto why = CheckRange("--target-resolution", SettingType::kInteger, resolution, kTargetResolutionRange);
+        !why.empty())
+      throw Error(why);
+    o.analytic = spec;
+    o.resolution = resolution;
+  }
+  return pipeline::Target(o).grid;  // the run's target stage, so both read a target the same way
 }
 
 void WriteOutput(const std::string& path, const std::string& text) {

@@ -103,7 +103,7 @@ std::vector<std::string> ExpectedStages(const json& e) {
 TEST(ShippedExperiments, TheListIsTheDocumentedOne) {
   const std::vector<std::string> expected = {"bunny-193",           "bunny-demo",           "bunny-ear-portals",
                                              "bunny-intricate",     "bunny-modulus",        "bunny-origin-offset",
-                                             "bunny-paper",         "bunny-varying-alpha",  "hexagram-bunny-mask",
+                                             "bunny-paper",         "bunny-varying-alpha",  "elephant-intricate",   "hexagram-bunny-mask",
                                              "koch-noise-portals",  "koch-portal",          "precision-comparison",
                                              "tooth-intricate",     "tooth-paper"};
   EXPECT_EQ(ShippedExperiments(), expected) << "a new shipped experiment: add it to docs/benchmarks.md §10";
