@@ -69,7 +69,8 @@ void RunCase(const CaseSpec& s) {
   choice.precision = ParsePrecision(s.precision);
   choice.storage = ParseStorage(s.storage);
   choice.repeats = s.repeats;
-  const json r = pipeline::EvaluateEnergy(map, grid, choice);
+  choice.weights = WeightField::kLayer;  // the grid above
+  const json r = pipeline::EnergyStage(map, sdf, choice);
   WriteOutput("", r.dump() + "\n");
 }
 

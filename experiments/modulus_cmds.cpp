@@ -12,6 +12,7 @@
 #include "experiments/pipeline/compare.h"
 #include "experiments/pipeline/modulus.h"
 #include "experiments/pipeline/portal.h"
+#include "experiments/pipeline/product.h"
 #include "mesh/julia_field.h"
 #include "mesh/modulus_target.h"
 #include "quijibo/error.h"
@@ -122,7 +123,7 @@ void AddModulusCommands(CLI::App& app) {
     b->add_option("--iterations", a->iterations, "iterations")->capture_default_str();
     b->add_option("--escape", a->escape, "escape radius")->capture_default_str();
     b->add_option("--repeats", a->repeats, "Repeats (median reported)")->capture_default_str()->check(CLI::Range(1, 20));
-    b->add_flag("--mesh", a->mesh, "Also run MeshField at the same resolution and report CPU per triangle");
+    b->add_flag("--mesh", a->mesh, "Also mesh the set at the same resolution (the modulus stage's mesher) and report CPU per triangle");
     b->add_option("--json", a->out_json, "Write the results here");
     b->callback([a] {
       mesh::LoadedTarget lt = mesh::LoadModulusTarget(a->target, a->sdf_resolution);
@@ -178,19 +179,19 @@ void AddModulusCommands(CLI::App& app) {
                   {"cpu_us_per_node", 1e6 * median(cpu) / nodes}, {"inside_nodes", inside},
                   {"iterations_histogram", iters}};
       if (a->mesh) {
-        mesh::MeshingOptions mo;
-        mo.min_corner = {-0.5, -0.5, -0.5};
-        mo.max_corner = {0.5, 0.5, 0.5};
-        mo.resolution = n;
-        mesh::MeshingSummary ms;
-        const double w0 = pipeline::WallSeconds(), c0 = pipeline::CpuSeconds();
-        const mesh::TriangleMesh m = mesh::MeshField(mesh::MakeQuaternionMapField(map, jo, 1.0), mo, &ms);
-        const double w = pipeline::WallSeconds() - w0, c = pipeline::CpuSeconds() - c0;
-        rep["mesh"] = {{"triangles", m.triangles.size()}, {"wall_seconds", w}, {"cpu_seconds", c},
-                       {"cpu_us_per_triangle", 1e6 * c / std::max<double>(1, m.triangles.size())},
+        // The shape modulus stage's 3D product (the shared mesher) on the same box and resolution.
+        pipeline::ProductOutputOptions po;
+        po.format = "ply";
+        po.meshing.resolution = n;
+        po.box = std::vector<double>{-0.5, -0.5, -0.5, 0.5, 0.5, 0.5};
+        const pipeline::Product p = pipeline::Produce(map, po, jo, lt.target, false);
+        const double w = p.report["seconds"], c = p.report["cpu_seconds"];
+        const std::size_t triangles = p.mesh.triangles.size();
+        rep["mesh"] = {{"triangles", triangles}, {"wall_seconds", w}, {"cpu_seconds", c},
+                       {"cpu_us_per_triangle", 1e6 * c / std::max<double>(1, double(triangles))},
                        {"reference_cpu_us_per_triangle", 1e6 * 338.1 / 2381944},
-                       {"nodes_evaluated", ms.nodes_evaluated}, {"bisection_evaluations", ms.bisection_evaluations},
-                       {"summary", ms.report()}};
+                       {"nodes_evaluated", p.report["nodes_evaluated"]},
+                       {"bisection_evaluations", p.report["bisection_evaluations"]}, {"summary", p.report}};
       }
       if (!a->out_json.empty()) WriteFileAtomically(a->out_json, rep.dump(1) + "\n");
       std::printf("%s\n", rep.dump(1).c_str());

@@ -7,18 +7,18 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <unistd.h>
 
 #include "optim/ceres_backend.h"
 #include "optim/checkpoint.h"
 #include "optim/jsonl_log.h"
+#include "optim/level_objective.h"
 #include "optim/lbfgsb.h"
 #include "optim/pass_weights.h"
 #include "optim/progress_line.h"
 #include "optim/run_state.h"
-#include "quijibo/band_energy.h"
-#include "quijibo/cached_energy.h"
 #include "quijibo/error.h"
 #include "quijibo/io.h"
 
@@ -126,335 +126,320 @@ class SignalGuard {
   struct sigaction old_int_ {}, old_term_ {};
 };
 
-// The energy over all R + 3 variables, whichever evaluator computes it.
+// One optimization run (optimizer.h): Run walks the schedule, RunLevel one level, RunPass one
+// pass's minimization, OnIteration what follows each iteration. Without an output folder there
+// is no log, no checkpoint and no file; the records still go to the progress line and the
+// callbacks.
 template <class Scalar>
-class Objective {
+class Runner {
  public:
-  using Vector = Eigen::Matrix<Scalar, -1, 1>;
-  virtual ~Objective() = default;
-  virtual Evaluation<Scalar> Evaluate(const Vector& x, EnergyMode mode) = 0;
-  virtual void BeginVariablePass(const Vector& x) = 0;
-  virtual void SetWeights(const std::vector<double>& w, double eta) = 0;
-  virtual void BeginPass() {}
-  // What the pass's end adds to its summary (the band's statistics), given x and the energy the
-  // pass ended with.
-  virtual nlohmann::json PassReport(const Vector&, EnergyMode, Scalar) { return nullptr; }
-};
-
-class LogLinearObjective : public Objective<double> {
- public:
-  explicit LogLinearObjective(LogLinearEnergy* e) : e_(e) {}
-  Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode) override { return e_->Evaluate(x, mode); }
-  void BeginVariablePass(const Eigen::VectorXd& x) override { e_->BeginVariablePass(x); }
-  void SetWeights(const std::vector<double>& w, double eta) override { e_->SetWeights(w, eta); }
-
- private:
-  LogLinearEnergy* e_;
-};
-
-// The narrow band (band_energy.h) over a dense evaluator's matrix; at every pass's end the
-// energy is compared with the dense one.
-class BandObjective : public Objective<double> {
- public:
-  BandObjective(LogLinearEnergy* e, std::shared_ptr<const BandBlocks> blocks) : dense_(e), band_(e, std::move(blocks)) {}
-  Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode) override { return band_.Evaluate(x, mode); }
-  void BeginVariablePass(const Eigen::VectorXd& x) override { dense_->BeginVariablePass(x); }
-  void SetWeights(const std::vector<double>& w, double eta) override { dense_->SetWeights(w, eta); }
-  void BeginPass() override {
-    band_.Invalidate();
-    band_.ResetStats();
-  }
-  json PassReport(const Eigen::VectorXd& x, EnergyMode mode, double energy) override {
-    const double dense = dense_->Evaluate(x, mode, false).energy;
-    const BandStats& s = band_.stats();
-    return {{"cells", s.cells}, {"band_cells", s.band_cells}, {"mean_fraction", s.mean_fraction()},
-            {"work_fraction", s.work_fraction()}, {"max_cells", s.max_exact}, {"evaluations", s.evaluations},
-            {"anchors", s.anchors}, {"anchors_reach", s.anchors_reach}, {"anchors_work", s.anchors_work},
-            {"far_sweeps", s.far}, {"block_sweeps", s.block_sweeps}, {"blocks", s.blocks},
-            {"saturated_blocks", s.saturated_blocks}, {"cached_row_bytes", dense_->cached_row_bytes()},
-            {"dense_fallbacks", s.dense_fallbacks}, {"energy_dense", dense},
-            {"energy_error", std::fabs(energy - dense) / std::max(1e-300, std::fabs(dense))}};
-  }
-
- private:
-  LogLinearEnergy* dense_;
-  BandEnergy band_;
-};
-
-template <class Scalar>
-class CachedObjective : public Objective<Scalar> {
- public:
-  using Vector = Eigen::Matrix<Scalar, -1, 1>;
-  CachedObjective(const RationalMap& map, const EnergyGrid& grid, const EnergyOptions& o) : e_(map, grid, o) {}
-  Evaluation<Scalar> Evaluate(const Vector& x, EnergyMode mode) override { return e_.Evaluate(x, mode); }
-  void BeginVariablePass(const Vector&) override {}
-  void SetWeights(const std::vector<double>& w, double eta) override { e_.SetWeights(w, eta); }
-
- private:
-  CachedEnergy<Scalar> e_;
-};
-
-template <class Scalar>
-OptimizeSummary Run(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& o) {
   using Vector = Eigen::Matrix<Scalar, -1, 1>;
   using Type = IterationSummary::Type;
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::create_directories(o.out_dir, ec);
-  if (ec) throw Error(o.out_dir + ": cannot create the output folder: " + ec.message());
 
-  const std::string evaluator = ResolveEvaluator(o.evaluator, o.precision);
-  const bool loglinear = evaluator == "band" || evaluator == "dense";
-  const Fingerprint fingerprint(o, sdf, map);
-  RunState<Scalar> st;
-  st.x = map.variables().cast<Scalar>();
-  st.best_x = st.x;
-  CheckpointPosition start;
-  if (o.resume) {
-    start = ReadCheckpoint<Scalar>(o.out_dir + "/checkpoint.json", fingerprint, map.variable_count(), st);
-    if (start.complete) {
-      map.set_variables(st.best_x.template cast<double>());
-      st.summary.complete = true;
-      st.summary.seconds = st.elapsed_before;
-      st.summary.absolute_end = st.best_absolute;
-      return st.summary;
+  Runner(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& o)
+      : sdf_(sdf), map_(map), o_(o), folder_(!o.out_dir.empty()), progress_(o.schedule) {}
+
+  OptimizeSummary Run() {
+    if (folder_) CreateFolder();
+    evaluator_ = ResolveEvaluator(o_.evaluator, o_.precision);
+    st_.x = map_.variables().template cast<Scalar>();
+    st_.best_x = st_.x;
+    if (folder_) fingerprint_.emplace(o_, sdf_, map_);
+    if (o_.resume) {
+      start_ = ReadCheckpoint<Scalar>(Path("checkpoint.json"), *fingerprint_, map_.variable_count(), st_);
+      if (start_.complete) return Completed();
+    }
+    AddObservers();
+    // Unless the passes evaluate densely, the log-linear evaluators are read through bands (the
+    // absolute energy's too, where not stored), which need only the rows near the surface.
+    loglinear_ = o_.loglinear();
+    loglinear_.band = evaluator_ != "dense";
+    weights_.emplace(sdf_, o_.weights, map_, o_.energy, loglinear_);
+    ResolveLevels();
+    if (!o_.resume) NotifyRunStart();
+
+    SignalGuard signals;
+    for (int li = start_.level_index; li < int(o_.schedule.levels.size()) && !stopped_; ++li) RunLevel(li);
+    return Finish();
+  }
+
+ private:
+  std::string Path(const std::string& name) const { return o_.out_dir + "/" + name; }
+
+  void CreateFolder() const {
+    std::error_code ec;
+    std::filesystem::create_directories(o_.out_dir, ec);
+    if (ec) throw Error(o_.out_dir + ": cannot create the output folder: " + ec.message());
+  }
+
+  // A resume of a run that had finished: its result, nothing run again.
+  OptimizeSummary Completed() {
+    map_.set_variables(st_.best_x.template cast<double>());
+    st_.summary.complete = true;
+    st_.summary.seconds = st_.elapsed_before;
+    st_.summary.absolute_end = st_.best_absolute;
+    return st_.summary;
+  }
+
+  // The log first, so the others see a record only once it is logged; the caller's callbacks last.
+  void AddObservers() {
+    if (folder_) {
+      log_.emplace(Path("log.jsonl"), o_.resume ? start_.log_bytes : -1);
+      checkpoints_.emplace(Path("checkpoint.json"), *fingerprint_, o_, st_, *log_);
+      observers_ = {&*log_, &progress_, &*checkpoints_};
+    } else {
+      observers_ = {&progress_};
+    }
+    observers_.insert(observers_.end(), o_.callbacks.begin(), o_.callbacks.end());
+  }
+
+  void Notify(IterationSummary s) {
+    s.step = st_.step;
+    s.seconds = st_.Elapsed();
+    for (IterationCallback* observer : observers_)
+      if ((*observer)(s) == CallbackReturnType::kAbort) abort_ = true;
+  }
+
+  void WriteCheckpoint(int li, int pj, int iteration, const Vector& x, const Vector& pass_start) {
+    if (checkpoints_) checkpoints_->Write(li, pj, iteration, x, pass_start, false);
+  }
+
+  // The resolution each level runs at (deterministic, so a resumed run finds the same).
+  void ResolveLevels() {
+    st_.summary.levels.clear();
+    for (const LevelSpec& level : o_.schedule.levels) {
+      OptimizeSummary::Level l;
+      l.scheduled = level.resolution;
+      l.resolution = ResolvedLevelResolution(sdf_, weights_->finest_weight(), o_.weights, level.resolution,
+                                             o_.level_weights, o_.min_level_fidelity, &l.fidelity);
+      st_.summary.levels.push_back(l);
     }
   }
 
-  // The observers: the log first, so the others see a record only once it is logged; the
-  // caller's callbacks last.
-  JsonlLog log(o.out_dir + "/log.jsonl", o.resume ? start.log_bytes : -1);
-  ProgressLine progress(o.schedule);
-  CheckpointWriter<Scalar> checkpoints(o.out_dir + "/checkpoint.json", fingerprint, o, st, log);
-  std::vector<IterationCallback*> observers = {&log, &progress, &checkpoints};
-  observers.insert(observers.end(), o.callbacks.begin(), o.callbacks.end());
-  bool abort = false;
-  auto notify = [&](IterationSummary s) {
-    s.step = st.step;
-    s.seconds = st.Elapsed();
-    for (IterationCallback* observer : observers)
-      if ((*observer)(s) == CallbackReturnType::kAbort) abort = true;
-  };
-
-  // Unless the passes evaluate densely, the log-linear evaluators are read through bands (the
-  // absolute energy's too, where not stored), which need only the rows near the surface.
-  LogLinearOptions loglinear_options = o.loglinear();
-  loglinear_options.band = evaluator != "dense";
-  PassWeights weights(sdf, o.weights, map, o.energy, loglinear_options);
-  // The resolution each level runs at (deterministic, so a resumed run finds the same).
-  st.summary.levels.clear();
-  for (const LevelSpec& level : o.schedule.levels) {
-    OptimizeSummary::Level l;
-    l.scheduled = level.resolution;
-    l.resolution = ResolvedLevelResolution(sdf, weights.finest_weight(), o.weights, level.resolution,
-                                           o.level_weights, o.min_level_fidelity, &l.fidelity);
-    st.summary.levels.push_back(l);
-  }
-  if (!o.resume) {
-    st.summary.absolute_start = weights.Absolute(st.x.template cast<double>());
-    st.best_absolute = st.summary.absolute_start;
+  void NotifyRunStart() {
+    st_.summary.absolute_start = weights_->Absolute(st_.x.template cast<double>());
+    st_.best_absolute = st_.summary.absolute_start;
     IterationSummary s;
     s.type = Type::kRun;
-    s.absolute = st.summary.absolute_start;
-    s.run = {{"schedule", o.schedule.notation()}, {"evaluator", evaluator}, {"precision", PrecisionName(o.precision)},
-             {"backend", o.backend}, {"weights", WeightFieldName(o.weights)},
-             {"roots", {{"top", map.top_count()}, {"bottom", map.bottom_count()}}}};
-    notify(s);
+    s.absolute = st_.summary.absolute_start;
+    s.run = {{"schedule", o_.schedule.notation()}, {"evaluator", evaluator_}, {"precision", PrecisionName(o_.precision)},
+             {"backend", o_.backend}, {"weights", WeightFieldName(o_.weights)},
+             {"roots", {{"top", map_.top_count()}, {"bottom", map_.bottom_count()}}}};
+    Notify(s);
   }
 
-  SignalGuard signals;
-  bool stopped = false;  // by a signal or a callback
   // A callback's abort on a record other than an iteration takes effect before the next pass.
-  auto stop_before = [&](int li, int pj) {
-    if (abort) checkpoints.Write(li, pj, 0, st.x, st.x, false);
-    return stopped = abort;
-  };
-  for (int li = start.level_index; li < int(o.schedule.levels.size()) && !stopped; ++li) {
-    const int first_pass = li == start.level_index ? start.pass_index : 0;
-    if (stop_before(li, first_pass)) break;
-    LevelSpec level = o.schedule.levels[li];
-    const OptimizeSummary::Level& resolved = st.summary.levels[std::size_t(li)];
-    level.resolution = resolved.resolution;
+  bool StopBefore(int li, int pj) {
+    if (abort_) WriteCheckpoint(li, pj, 0, st_.x, st_.x);
+    return stopped_ = abort_;
+  }
+
+  void RunLevel(int li) {
+    const int first_pass = li == start_.level_index ? start_.pass_index : 0;
+    if (StopBefore(li, first_pass)) return;
+    const LevelSpec& level = o_.schedule.levels[std::size_t(li)];
+    const OptimizeSummary::Level& resolved = st_.summary.levels[std::size_t(li)];
     if (resolved.resolution != resolved.scheduled && first_pass == 0 &&
-        !(li == start.level_index && start.iteration > 0)) {
+        !(li == start_.level_index && start_.iteration > 0)) {
       IterationSummary s;
       s.type = Type::kLevelRaised;
       s.level = resolved.resolution;
       s.level_index = li;
       s.scheduled = resolved.scheduled;
       s.fidelity = resolved.fidelity;
-      notify(s);
+      Notify(s);
     }
-    const EnergyGrid grid = weights.Level(level.resolution, o.level_weights);
-    // At the finest level the log-linear evaluator shares the absolute one's matrix.
-    const bool share = loglinear && grid.frame == weights.finest().frame;
-    std::unique_ptr<LogLinearEnergy> level_energy;
-    std::unique_ptr<Objective<Scalar>> objective;
-    if constexpr (std::is_same_v<Scalar, double>) {
-      if (loglinear) {
-        if (!share) level_energy = std::make_unique<LogLinearEnergy>(map, grid, o.energy, loglinear_options);
-        LogLinearEnergy* e = share ? &weights.absolute_evaluator() : level_energy.get();
-        if (evaluator == "band")
-          objective = std::make_unique<BandObjective>(e, share ? weights.absolute_blocks() : nullptr);
-        else objective = std::make_unique<LogLinearObjective>(e);
-      }
-    }
-    if (!objective) objective = std::make_unique<CachedObjective<Scalar>>(map, grid, o.energy);
-
+    LevelObjective<Scalar> objective(*weights_, map_, resolved.resolution, o_.level_weights, evaluator_, o_.energy,
+                                     loglinear_);
     for (int pj = first_pass; pj < int(level.passes.size()); ++pj) {
-      if (stop_before(li, pj)) break;
-      if (pj == 0 && li > 0 && o.level_start == OptimizeOptions::LevelStart::kBest &&
-          st.summary.best_pass + 1 != int(st.summary.passes.size())) {
-        st.x = st.best_x;
+      if (StopBefore(li, pj)) break;
+      if (pj == 0 && li > 0 && o_.level_start == OptimizeOptions::LevelStart::kBest &&
+          st_.summary.best_pass + 1 != int(st_.summary.passes.size())) {
+        st_.x = st_.best_x;
         IterationSummary s;
         s.type = Type::kLevelStart;
-        s.level = level.resolution;
+        s.level = resolved.resolution;
         s.level_index = li;
-        s.from_pass = st.summary.best_pass;
-        s.absolute = st.best_absolute;
-        notify(s);
+        s.from_pass = st_.summary.best_pass;
+        s.absolute = st_.best_absolute;
+        Notify(s);
       }
-      const PassSpec& spec = level.passes[pj];
-      const bool resumed_mid_pass = li == start.level_index && pj == start.pass_index && start.iteration > 0;
-      const int first_iteration = resumed_mid_pass ? start.iteration : 0;
-      if (!resumed_mid_pass) st.pass_start_x = st.x;
-      const auto pass_t0 = std::chrono::steady_clock::now();
-      IterationSummary where;
-      where.level = level.resolution;
-      where.level_index = li;
-      where.pass_index = pj;
-      where.kind = char(spec.kind);
-      if (!resumed_mid_pass) {
-        IterationSummary s = where;
-        s.type = Type::kPassStart;
-        notify(s);
-      }
-      weights.BeginPass(spec.kind, level.resolution, grid, st.pass_start_x.template cast<double>(),
-                        [&](const std::vector<double>& w, double eta) { objective->SetWeights(w, eta); }, share);
-      objective->BeginPass();
-      const bool variable = spec.kind == PassKind::kVariable;
-      const EnergyMode mode = variable ? EnergyMode::kVariable : EnergyMode::kFull;
-      if (variable) objective->BeginVariablePass(st.x);
-      const int na = variable ? 3 : int(st.x.size());
-      Vector xa = st.x.head(na);
-      Vector lb = Vector::Zero(na), ub = Vector::Constant(na, std::numeric_limits<Scalar>::infinity());
-      lb[0] = -std::numeric_limits<Scalar>::infinity();
-      PassSummary ps;
-      ps.level = level.resolution;
-      ps.level_index = li;
-      ps.pass_index = pj;
-      ps.kind = char(spec.kind);
-      bool first_eval = true;
-      // A resumed pass evaluates its start point once more than the uninterrupted one did.
-      const int evaluation_offset = resumed_mid_pass ? st.pass_evaluations - 1 : 0;
-      if (resumed_mid_pass) ps.energy_start = st.pass_energy_start, first_eval = false;
-      Vector full = st.x;
-      st.live = &full;
-      st.active = na;
-      // Evaluate.
-      auto f = [&](const Vector& y, Vector& g) -> Scalar {
-        full.head(na) = y;
-        const Evaluation<Scalar> ev = objective->Evaluate(full, mode);
-        g = ev.gradient.head(na);
-        ps.overflowed_cells = std::max<long long>(ps.overflowed_cells, ev.counts.overflowed);
-        if (first_eval) ps.energy_start = ToDouble(ev.energy), first_eval = false;
-        return ev.energy;
-      };
-      // Step (the minimizer), then notify.
-      auto on_iteration = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
-        ++st.step;
-        st.pass_energy_start = ps.energy_start;
-        st.pass_evaluations = evals + evaluation_offset;
-        IterationSummary s = where;
-        s.type = Type::kIteration;
-        s.iteration = it;
-        s.evaluations = st.pass_evaluations;
-        s.energy = ToDouble(fx);
-        s.projected_gradient_norm = ToDouble(pg);
-        notify(s);
-        if (it % o.absolute_every == 0) {
-          IterationSummary a = where;
-          a.type = Type::kAbsolute;
-          a.iteration = it;
-          a.energy = weights.Absolute(st.Current().template cast<double>());
-          notify(a);
-        }
-        IterationAction action = IterationAction::kContinue;
-        if (st.step == TestSignalStep()) std::raise(SIGINT);  // a Ctrl-C, handled before raise returns
-        if (g_interrupted || abort) {
-          checkpoints.Write(li, pj, it, st.Current(), st.pass_start_x, false);
-          action = IterationAction::kStop;
-        } else if (it % o.checkpoint_every == 0) {
-          action = IterationAction::kRestartMemory;  // the checkpoint writer wrote this state
-        }
-        if (st.step == TestExitStep()) _exit(kTestExitCode);  // a crash after this step's log and checkpoint
-        return action;
-      };
-      LbfgsbOptions<Scalar> lo;
-      lo.memory = o.memory;
-      lo.max_iterations = spec.max_iterations;
-      lo.tolerance = Scalar(spec.tolerance);
-      LbfgsbResult<Scalar> res;
-      if constexpr (std::is_same_v<Scalar, double>) {
-        if (o.backend == "ceres")
-          res = MinimizeCeres(f, xa, lb, lo, on_iteration, first_iteration);
-        else
-          res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, on_iteration, first_iteration);
-      } else {
-        res = MinimizeBounded<Scalar>(f, xa, lb, ub, lo, on_iteration, first_iteration);
-      }
-      st.live = nullptr;
-      weights.EndPass();
-      st.x.head(na) = xa;
-      if (res.stop == StopReason::kInterrupted) {
-        stopped = true;
+      if (!RunPass(li, pj, level.passes[std::size_t(pj)], objective)) {
+        stopped_ = true;
         break;
       }
-      ps.stop = StopReasonName(res.stop);
-      ps.message = res.message;
-      ps.line_search_restarts = res.line_search_restarts;
-      ps.iterations = res.iterations;
-      ps.evaluations = res.evaluations + evaluation_offset;
-      ps.energy_end = ToDouble(res.f);
-      // Before the absolute energy, which changes a shared evaluator's weights.
-      ps.band = objective->PassReport(st.x, mode, res.f);
-      ps.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_t0).count();
-      ps.absolute_end = weights.Absolute(st.x.template cast<double>());
-      ps.stalled = ps.iterations == 0;
-      if (ps.absolute_end < st.best_absolute) {
-        st.best_absolute = ps.absolute_end;
-        st.best_x = st.x;
-        st.summary.best_pass = int(st.summary.passes.size());
-      }
-      st.summary.passes.push_back(ps);
-      IterationSummary s = where;
-      s.type = Type::kPassEnd;
-      s.pass = ps;
-      notify(s);  // the checkpoint writer records the next pass as the place to continue
     }
-    if (!stopped) {
-      RationalMap level_map = map;
-      level_map.set_variables(st.x.template cast<double>());
-      WriteMap(o.out_dir + "/map_level_" + std::to_string(level.resolution) + ".json", level_map);
+    if (!stopped_ && folder_) {
+      RationalMap level_map = map_;
+      level_map.set_variables(st_.x.template cast<double>());
+      WriteMap(Path("map_level_" + std::to_string(resolved.resolution) + ".json"), level_map);
     }
   }
-  map.set_variables(st.best_x.template cast<double>());
-  st.summary.complete = !stopped;
-  if (stopped) st.summary.stop_reason = g_interrupted ? "interrupted" : "aborted by a callback";
-  if (stopped) st.summary.signal = int(g_interrupted);
-  st.summary.seconds = st.Elapsed();
-  st.summary.absolute_end = st.best_absolute;
-  WriteFileAtomically(o.out_dir + "/summary.json", st.summary.ToJson(o).dump(1) + "\n");
-  return st.summary;
-}
+
+  // One pass's minimization; false when a signal or a callback stopped it.
+  bool RunPass(int li, int pj, const PassSpec& spec, LevelObjective<Scalar>& objective) {
+    const bool resumed_mid_pass = li == start_.level_index && pj == start_.pass_index && start_.iteration > 0;
+    if (!resumed_mid_pass) st_.pass_start_x = st_.x;
+    const auto pass_t0 = std::chrono::steady_clock::now();
+    IterationSummary where;
+    where.level = objective.resolution();
+    where.level_index = li;
+    where.pass_index = pj;
+    where.kind = char(spec.kind);
+    if (!resumed_mid_pass) {
+      IterationSummary s = where;
+      s.type = Type::kPassStart;
+      Notify(s);
+    }
+    objective.BeginPass(spec.kind, st_.pass_start_x, st_.x);
+    const int na = objective.mode() == EnergyMode::kVariable ? 3 : int(st_.x.size());
+    Vector xa = st_.x.head(na);
+    PassSummary ps;
+    ps.level = objective.resolution();
+    ps.level_index = li;
+    ps.pass_index = pj;
+    ps.kind = char(spec.kind);
+    bool first_eval = true;
+    // A resumed pass evaluates its start point once more than the uninterrupted one did.
+    const int evaluation_offset = resumed_mid_pass ? st_.pass_evaluations - 1 : 0;
+    if (resumed_mid_pass) ps.energy_start = st_.pass_energy_start, first_eval = false;
+    Vector full = st_.x;
+    st_.live = &full;
+    st_.active = na;
+    const BoundedObjective<Scalar> f = [&](const Vector& y, Vector& g) -> Scalar {
+      full.head(na) = y;
+      const Evaluation<Scalar> ev = objective.Evaluate(full);
+      g = ev.gradient.head(na);
+      ps.overflowed_cells = std::max<long long>(ps.overflowed_cells, ev.counts.overflowed);
+      if (first_eval) ps.energy_start = ToDouble(ev.energy), first_eval = false;
+      return ev.energy;
+    };
+    const LbfgsbCallback<Scalar> on_iteration = [&](int it, int evals, const Scalar& fx, const Scalar& pg) {
+      return OnIteration(where, it, evals + evaluation_offset, ps.energy_start, fx, pg);
+    };
+    const LbfgsbResult<Scalar> res = Minimize(f, xa, spec, on_iteration, resumed_mid_pass ? start_.iteration : 0);
+    st_.live = nullptr;
+    objective.EndPass();
+    st_.x.head(na) = xa;
+    if (res.stop == StopReason::kInterrupted) return false;
+    ps.stop = StopReasonName(res.stop);
+    ps.message = res.message;
+    ps.line_search_restarts = res.line_search_restarts;
+    ps.iterations = res.iterations;
+    ps.evaluations = res.evaluations + evaluation_offset;
+    ps.energy_end = ToDouble(res.f);
+    // Before the absolute energy, which changes a shared evaluator's weights.
+    ps.band = objective.PassReport(st_.x, res.f);
+    ps.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_t0).count();
+    EndPass(where, ps);
+    return true;
+  }
+
+  // The minimizer: L-BFGS-B, or Ceres in double; the variables are bounded below by 0 but ln C.
+  LbfgsbResult<Scalar> Minimize(const BoundedObjective<Scalar>& f, Vector& xa, const PassSpec& spec,
+                                const LbfgsbCallback<Scalar>& on_iteration, int first_iteration) const {
+    const Eigen::Index na = xa.size();
+    Vector lb = Vector::Zero(na), ub = Vector::Constant(na, std::numeric_limits<Scalar>::infinity());
+    lb[0] = -std::numeric_limits<Scalar>::infinity();
+    LbfgsbOptions<Scalar> lo;
+    lo.memory = o_.memory;
+    lo.max_iterations = spec.max_iterations;
+    lo.tolerance = Scalar(spec.tolerance);
+    if constexpr (std::is_same_v<Scalar, double>) {
+      if (o_.backend == "ceres") return MinimizeCeres(f, xa, lb, lo, on_iteration, first_iteration);
+    }
+    return MinimizeBounded<Scalar>(f, xa, lb, ub, lo, on_iteration, first_iteration);
+  }
+
+  // After iteration `it` of the pass `where`: the records, the absolute energy every
+  // absolute_every iterations, and whether to stop (signal, callback) or restart the memory at a
+  // checkpoint.
+  IterationAction OnIteration(const IterationSummary& where, int it, int evaluations, double energy_start,
+                              const Scalar& fx, const Scalar& pg) {
+    ++st_.step;
+    st_.pass_energy_start = energy_start;
+    st_.pass_evaluations = evaluations;
+    IterationSummary s = where;
+    s.type = Type::kIteration;
+    s.iteration = it;
+    s.evaluations = evaluations;
+    s.energy = ToDouble(fx);
+    s.projected_gradient_norm = ToDouble(pg);
+    Notify(s);
+    if (it % o_.absolute_every == 0) {
+      IterationSummary a = where;
+      a.type = Type::kAbsolute;
+      a.iteration = it;
+      a.energy = weights_->Absolute(st_.Current().template cast<double>());
+      Notify(a);
+    }
+    IterationAction action = IterationAction::kContinue;
+    if (st_.step == TestSignalStep()) std::raise(SIGINT);  // a Ctrl-C, handled before raise returns
+    if (g_interrupted || abort_) {
+      WriteCheckpoint(where.level_index, where.pass_index, it, st_.Current(), st_.pass_start_x);
+      action = IterationAction::kStop;
+    } else if (it % o_.checkpoint_every == 0) {
+      // The checkpoint writer wrote this state; the memory restarts so that resuming from it is
+      // exact. Without a folder the memory restarts as well: the same run, with or without files.
+      action = IterationAction::kRestartMemory;
+    }
+    if (st_.step == TestExitStep()) _exit(kTestExitCode);  // a crash after this step's log and checkpoint
+    return action;
+  }
+
+  // The pass's absolute energy, the best map so far, the pass_end record.
+  void EndPass(const IterationSummary& where, PassSummary& ps) {
+    ps.absolute_end = weights_->Absolute(st_.x.template cast<double>());
+    ps.stalled = ps.iterations == 0;
+    if (ps.absolute_end < st_.best_absolute) {
+      st_.best_absolute = ps.absolute_end;
+      st_.best_x = st_.x;
+      st_.summary.best_pass = int(st_.summary.passes.size());
+    }
+    st_.summary.passes.push_back(ps);
+    IterationSummary s = where;
+    s.type = Type::kPassEnd;
+    s.pass = ps;
+    Notify(s);  // the checkpoint writer records the next pass as the place to continue
+  }
+
+  OptimizeSummary Finish() {
+    map_.set_variables(st_.best_x.template cast<double>());
+    st_.summary.complete = !stopped_;
+    if (stopped_) st_.summary.stop_reason = g_interrupted ? "interrupted" : "aborted by a callback";
+    if (stopped_) st_.summary.signal = int(g_interrupted);
+    st_.summary.seconds = st_.Elapsed();
+    st_.summary.absolute_end = st_.best_absolute;
+    if (folder_) WriteFileAtomically(Path("summary.json"), st_.summary.ToJson(o_).dump(1) + "\n");
+    return st_.summary;
+  }
+
+  const ScalarGrid& sdf_;
+  RationalMap& map_;
+  const OptimizeOptions& o_;
+  const bool folder_;  // an output folder: the log, checkpoints, maps and summary are written
+  std::string evaluator_;  // resolved: band, dense or cached
+  RunState<Scalar> st_;
+  CheckpointPosition start_;  // where the run begins (a resume's checkpoint)
+  std::optional<Fingerprint> fingerprint_;
+  std::optional<JsonlLog> log_;
+  ProgressLine progress_;
+  std::optional<CheckpointWriter<Scalar>> checkpoints_;
+  std::vector<IterationCallback*> observers_;
+  LogLinearOptions loglinear_;
+  std::optional<PassWeights> weights_;
+  bool abort_ = false;    // a callback asked to stop
+  bool stopped_ = false;  // by a signal or a callback
+};
 
 }  // namespace
 
 OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options) {
   if (auto why = options.Validate(); !why.empty()) throw Error("optimize: " + why);
-  if (options.out_dir.empty()) throw Error("optimize: an output folder is required");
+  if (options.resume && options.out_dir.empty())
+    throw Error("optimize: resume needs the output folder of the interrupted run");
   if (auto why = map.validate(); !why.empty()) throw Error("optimize: map: " + why);
-  return DispatchPrecision(options.precision, [&]<class Real>() { return Run<Real>(sdf, map, options); });
+  return DispatchPrecision(options.precision, [&]<class Real>() { return Runner<Real>(sdf, map, options).Run(); });
 }
 
 }  // namespace quijibo::optim

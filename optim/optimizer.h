@@ -1,7 +1,8 @@
 // The QUIJIBO optimization (2015 paper §4.5, §5.1): a schedule of levels and passes run with
 // bound-constrained L-BFGS, with a JSON-lines log, a summary, atomic checkpoints and resumption.
 //
-// Files written to `out_dir`:
+// Files written to `out_dir` (none without one: the run is the same, its records go only to the
+// progress line and the callbacks, and it cannot be resumed):
 //   log.jsonl          one line per iteration (relative energy: the current level and weights),
 //                      "absolute" lines every `absolute_every` iterations and at pass ends (psi on
 //                      the finest grid with the original weights, always by the exact log-linear
@@ -91,8 +92,8 @@ struct OptimizeOptions {
   int checkpoint_every = 25;   // iterations between checkpoints (and L-BFGS memory restarts)
 
   // Not settings of the optimization (not in ToJson, not in the checkpoint's fingerprint):
-  std::string out_dir;         // required
-  bool resume = false;         // continue from out_dir/checkpoint.json
+  std::string out_dir;         // "": nothing is written (no log, checkpoint, maps or summary)
+  bool resume = false;         // continue from out_dir/checkpoint.json (needs out_dir)
   // Called with every record of the run (IterationSummary), in order, after the optimizer's own
   // observers; kAbort stops the run as an interrupt does. Not owned.
   std::vector<IterationCallback*> callbacks;
@@ -156,7 +157,9 @@ struct OptimizeSummary {
 // the target `sdf`; `map` holds the result (the best map, see above) on return. Throws
 // quijibo::Error on bad input, and with options.resume on a checkpoint written with other settings,
 // another target or another initial map. When a SIGINT/SIGTERM arrives or a callback aborts,
-// writes a checkpoint and returns with complete = false.
+// writes a checkpoint (with an output folder) and returns with complete = false. The energy it
+// minimizes, on its own: optim::Objective (objective.h). Callers outside the libraries go through
+// the pipeline's optimize stage (experiments/pipeline/optimize.h).
 OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const OptimizeOptions& options);
 
 // For kill-and-resume tests that do not depend on timing: with QUIJIBO_TEST_EXIT_AFTER_STEP=k in

@@ -36,6 +36,8 @@ OptimizeStageResult OptimizeStage(const ScalarGrid& target, const RationalMap& i
   o.out_dir = out_dir;
   o.resume = resume;
   if (auto why = o.Validate(); !why.empty()) throw Error("optimize: " + why);
+  const bool folder = !out_dir.empty();
+  if (resume && !folder) throw Error("optimize: resume needs the folder of the interrupted run");
   // The initial map: given, or on resume the one the run started from.
   const std::string initial_path = out_dir + "/initial_map.json";
   OptimizeStageResult res;
@@ -43,8 +45,10 @@ OptimizeStageResult OptimizeStage(const ScalarGrid& target, const RationalMap& i
     res.map = ReadMap(initial_path);
   } else {
     res.map = initial;
-    fs::create_directories(out_dir);
-    WriteMap(initial_path, res.map);
+    if (folder) {
+      fs::create_directories(out_dir);
+      WriteMap(initial_path, res.map);
+    }
   }
   res.summary = optim::Optimize(target, res.map, o);
   const optim::OptimizeSummary& sum = res.summary;
@@ -52,13 +56,13 @@ OptimizeStageResult OptimizeStage(const ScalarGrid& target, const RationalMap& i
                                      {"precision", PrecisionName(o.precision)}, {"backend", o.backend},
                                      {"absolute_energy", sum.absolute_end}, {"best_pass", sum.best_pass},
                                      {"complete", sum.complete}};
-  if (!sum.complete) {
+  if (!sum.complete && sum.signal) {
     std::fprintf(stderr, "%s", sum.Report().c_str());
-    const std::string what = "checkpoint written to " + out_dir + "/checkpoint.json; continue with --resume";
-    if (sum.signal) throw Interrupted("interrupted (" + SignalName(sum.signal) + "); " + what, sum.signal);
-    throw Error("interrupted; " + what);
+    const std::string what = folder ? "checkpoint written to " + out_dir + "/checkpoint.json; continue with --resume"
+                                    : "nothing written (no output folder)";
+    throw Interrupted("interrupted (" + SignalName(sum.signal) + "); " + what, sum.signal);
   }
-  WriteMap(out_dir + "/map.json", res.map);
+  if (sum.complete && folder) WriteMap(out_dir + "/map.json", res.map);
   return res;
 }
 

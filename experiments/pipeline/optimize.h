@@ -1,5 +1,7 @@
-// The optimize stage: quijibo::Optimize (optim/optimizer.h) from an initial map on a target grid,
-// into its own folder (map.json, log.jsonl, summary.json, checkpoints; --resume continues).
+// The optimize stage: optim::Optimize (optim/optimizer.h) from an initial map on a target grid,
+// into its own folder (map.json, log.jsonl, summary.json, checkpoints; --resume continues) or, for
+// a caller that keeps the result itself (Python), into none. The faces (`quijibo optimize`,
+// `quijibo run`, Python) optimize only through it.
 #pragma once
 
 #include <filesystem>
@@ -28,9 +30,13 @@ struct OptimizeStageResult {
   optim::OptimizeSummary summary;
 };
 
-// Optimizes `initial` on `target` into `out_dir` (initial_map.json, map.json, log.jsonl,
-// summary.json, checkpoint.json; optim/optimizer.h); with `resume`, continues from the checkpoint
-// there. An interrupted run (SIGINT/SIGTERM) throws quijibo::Error after writing its checkpoint.
+// Optimizes `initial` on `target`. With an `out_dir`: into it (initial_map.json, map.json,
+// log.jsonl, summary.json, checkpoint.json; optim/optimizer.h), and with `resume` continues from
+// the checkpoint there, from the initial map it recorded (`initial` is not read). With out_dir "":
+// nothing is written and there is nothing to resume. options.optimizer.callbacks get every record
+// of the run. A run a callback aborted returns its best map so far with summary.complete false
+// (no map.json); an interrupted one (SIGINT/SIGTERM) prints its report and throws
+// quijibo::Interrupted, after writing its checkpoint.
 OptimizeStageResult OptimizeStage(const ScalarGrid& target, const RationalMap& initial,
                                   const OptimizeStageOptions& options, const std::string& out_dir, bool resume);
 

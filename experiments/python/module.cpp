@@ -14,12 +14,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <stdlib.h>
-
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -32,6 +29,7 @@
 #include "experiments/pipeline/initial.h"
 #include "experiments/pipeline/mesh.h"
 #include "experiments/pipeline/modulus.h"
+#include "experiments/pipeline/optimize.h"
 #include "experiments/pipeline/portal.h"
 #include "experiments/pipeline/run.h"
 #include "experiments/pipeline/target.h"
@@ -422,63 +420,43 @@ class PythonCallback : public optim::IterationCallback {
   std::unique_ptr<py::error_already_set> error_;
 };
 
-// A temporary folder for runs without `out`, removed with everything in it.
-class TemporaryFolder {
- public:
-  TemporaryFolder() {
-    std::string pattern = (std::filesystem::temp_directory_path() / "quijibo-optimize-XXXXXX").string();
-    if (!::mkdtemp(pattern.data())) throw Error(pattern + ": cannot create a temporary folder: " + std::strerror(errno));
-    path_ = pattern;
-  }
-  ~TemporaryFolder() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
-
+// The optimize stage, as `quijibo optimize` runs it; without `out` nothing is written.
 py::tuple OptimizeMap(const ScalarGrid& target, const RationalMap& initial, py::object schedule, py::object callback,
                       py::object out, bool resume, py::kwargs settings) {
   CheckMap(initial, "optimize");
   json j = ToJson(settings, "optimize");
   if (!schedule.is_none()) j["schedule"] = ToJson(schedule, "optimize/schedule");
-  optim::OptimizeOptions options =
-      optim::OptimizeOptions::FromJson(JsonReader(j, "optimize"), "", std::filesystem::current_path());
-  std::unique_ptr<TemporaryFolder> temporary;
-  if (out.is_none()) {
-    if (resume) throw Error("optimize: resume=True needs the folder of the interrupted run (out=...)");
-    temporary = std::make_unique<TemporaryFolder>();
-    options.out_dir = temporary->path();
-  } else {
-    options.out_dir = ToJson(out, "optimize/out").get<std::string>();
-  }
-  options.resume = resume;
+  pipeline::OptimizeStageOptions stage;
+  stage.optimizer = optim::OptimizeOptions::FromJson(JsonReader(j, "optimize"), "", std::filesystem::current_path());
+  if (out.is_none() && resume) throw Error("optimize: resume=True needs the folder of the interrupted run (out=...)");
+  const std::string out_dir = out.is_none() ? "" : ToJson(out, "optimize/out").get<std::string>();
   std::unique_ptr<PythonCallback> observer;
   if (!callback.is_none()) {
     if (!PyCallable_Check(callback.ptr())) throw Error("optimize: callback must be callable");
     observer = std::make_unique<PythonCallback>(callback);
-    options.callbacks.push_back(observer.get());
+    stage.optimizer.callbacks.push_back(observer.get());
   }
-  if (auto why = options.Validate(); !why.empty()) throw Error("optimize: " + why);
-  RationalMap map = initial;
-  optim::OptimizeSummary summary;
+  if (auto why = stage.optimizer.Validate(); !why.empty()) throw Error("optimize: " + why);
+  pipeline::OptimizeStageResult r;
+  bool interrupted = false;
   {
     py::gil_scoped_release release;
-    summary = optim::Optimize(target, map, options);
+    try {
+      r = pipeline::OptimizeStage(target, initial, stage, out_dir, resume);
+    } catch (const Interrupted&) {
+      interrupted = true;
+    }
   }
   if (observer) observer->Rethrow();
-  if (!summary.complete && summary.stop_reason == "interrupted") {
-    const std::string where = temporary ? "" : "; checkpoint written to " + options.out_dir +
-                                                    "/checkpoint.json, continue with resume=True";
+  if (interrupted) {
+    const std::string where = out_dir.empty() ? "" : "; checkpoint written to " + out_dir +
+                                                          "/checkpoint.json, continue with resume=True";
     PyErr_SetString(PyExc_KeyboardInterrupt, ("optimize: interrupted" + where).c_str());
     throw py::error_already_set();
   }
-  json report = summary.ToJson(options);
-  if (!summary.complete) report["stop_reason"] = summary.stop_reason;
-  return py::make_tuple(map, FromJson(report));
+  json report = r.summary.ToJson(stage.optimizer);
+  if (!r.summary.complete) report["stop_reason"] = r.summary.stop_reason;
+  return py::make_tuple(r.map, FromJson(report));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1027,8 +1005,8 @@ PYBIND11_MODULE(quijibo, m) {
         "the map is not changed). `schedule`: the paper's notation, a dict (the JSON form) or a .json path; other "
         "settings as keywords with the experiment's names (alpha=, evaluator=, weights=, max_iterations={'F': 50}, "
         "...). `callback(record)` gets every record of the run (a dict: the log.jsonl line) and returns True to "
-        "stop. `out`: the folder for log.jsonl, summary.json and checkpoints (default: a temporary folder, "
-        "removed); resume=True continues the interrupted run there. Returns (map, summary): the best map and "
+        "stop. `out`: the folder for initial_map.json, map.json, log.jsonl, summary.json and checkpoints (default: "
+        "none, nothing is written); resume=True continues the interrupted run there. Returns (map, summary): the best map and "
         "summary.json as a dict ('complete' False and 'stop_reason' when a callback stopped it). Ctrl-C writes a "
         "checkpoint and raises KeyboardInterrupt.");
   m.def("mesh", &Mesh, py::arg("map"), py::arg("resolution") = pipeline::MeshStageOptions{}.meshing.resolution,

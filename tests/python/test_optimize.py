@@ -87,3 +87,16 @@ def test_ctrl_c_writes_a_checkpoint_and_raises_keyboard_interrupt(tiny_case, tmp
     m, summary = quijibo.optimize(tiny_case["grid"], tiny_case["rational_map"], "12(F)", out=str(out), resume=True,
                                   max_iterations={"F": 50})
     assert summary["complete"] is True
+
+
+def test_without_out_the_map_is_the_one_written_with_out(tiny_case, tmp_path):
+    # Both go through the pipeline's optimize stage, as `quijibo optimize`; the folder changes
+    # nothing but the files.
+    settings = dict(max_iterations={"V": 5, "F": 10}, alpha=8)
+    out = tmp_path / "run"
+    a, sa = quijibo.optimize(tiny_case["grid"], tiny_case["rational_map"], "12(VF)", out=str(out), **settings)
+    b, sb = quijibo.optimize(tiny_case["grid"], tiny_case["rational_map"], "12(VF)", **settings)
+    assert np.array_equal(a.variables, b.variables)
+    assert sa["absolute_end"] == sb["absolute_end"] and sa["best_pass"] == sb["best_pass"]
+    assert np.array_equal(quijibo.read_map(str(out / "map.json")).variables, a.variables)
+    assert (out / "initial_map.json").exists() and (out / "log.jsonl").exists()
