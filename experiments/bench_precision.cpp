@@ -140,6 +140,150 @@ std::string Fmt(const char* f, double x) {
   return b;
 }
 
+struct PrecisionArgs {
+  std::string roots = "108,331,708", grids = "25,50,97", out_json = "bench-precision.json",
+              out_md = "bench-precision.md";
+  int repeats = 3;
+  double max_seconds = 600;
+  bool quick = false;
+  std::uint64_t seed = 1;
+  double exponent_min = 1.0, exponent_max = 5.0;
+};
+
+struct PrecisionConfig {
+  std::string evaluator, precision;
+};
+
+// The reference of the gradient and energy errors at one size: the first cached float128 or long
+// double case without overflow.
+struct PrecisionReference {
+  json gradient;
+  std::string name;
+  long double energy = 0;
+};
+
+// One case (a child process) into `row`: its figures, and its errors against `ref`, which it
+// becomes when it is the first that qualifies. `rate` (seconds per cell x root, per
+// configuration) predicts the case's time; a case predicted over --max-seconds is skipped.
+void MeasurePrecisionCase(const PrecisionArgs& a, int r, int n, const PrecisionConfig& c,
+                          std::map<std::string, double>& rate, PrecisionReference& ref, json& row) {
+  const std::string key = c.evaluator + "/" + c.precision;
+  const double work = double(n) * n * n * r;
+  const double predicted = rate.count(key) ? rate[key] * work * (a.repeats + 0.5) : 0.0;
+  if (predicted > a.max_seconds) {
+    row["skipped"] = "predicted " + FormatDuration(predicted) + " > --max-seconds " + FormatDuration(a.max_seconds);
+    return;
+  }
+  CaseSpec s;
+  s.roots = r;
+  s.grid = n;
+  s.repeats = a.repeats;
+  s.evaluator = c.evaluator;
+  s.precision = c.precision;
+  s.seed = a.seed;
+  s.exponent_min = a.exponent_min;
+  s.exponent_max = a.exponent_max;
+  const CaseResult res = Spawn(s);
+  if (!res.ok) {
+    row["skipped"] = "case failed: " + res.error;
+    return;
+  }
+  const json& rep = res.report;
+  for (const char* k : {"median_seconds", "seconds", "setup_seconds", "energy", "energy_exact", "overflowed_cells",
+                        "singular_cells", "cells"})
+    row[k] = rep[k];
+  row["peak_memory_mb"] = res.peak_mb;
+  if (rep.contains("storage")) row["storage"] = rep["storage"];
+  rate[key] = std::max(rep["median_seconds"].get<double>(), 1e-6) / work;
+  if (ref.gradient.is_null() && c.evaluator == "cached" && rep["overflowed_cells"] == 0 &&
+      (c.precision == "float128" || c.precision == "long-double")) {
+    ref.gradient = rep["gradient_exact"];
+    ref.name = c.precision;
+    ref.energy = ParseExact(rep["energy_exact"]);
+  }
+  if (ref.gradient.is_null()) return;
+  long double gmax = 0, emax = 0;
+  const json& g = rep["gradient_exact"];
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    const long double reference = ParseExact(ref.gradient[k]);
+    gmax = std::max(gmax, std::fabs(reference));
+    emax = std::max(emax, std::fabs(ParseExact(g[k]) - reference));
+  }
+  row["gradient_error"] = double(gmax > 0 ? emax / gmax : emax);
+  row["energy_error"] =
+      double(std::fabs(ParseExact(rep["energy_exact"]) - ref.energy) / std::max(std::fabs(ref.energy), 1e-300L));
+  row["reference"] = ref.name;
+}
+
+// A case's line of the Markdown table.
+std::string PrecisionLine(const json& row, int r, const Split& split, int n, const PrecisionConfig& c) {
+  std::string line = "| " + std::to_string(r) + " (" + std::to_string(split.top) + "/" + std::to_string(split.bottom) +
+                     ") | " + std::to_string(n) + "³ | " + c.evaluator + " | " + c.precision + " | ";
+  if (row.contains("skipped")) return line + "skipped: " + row["skipped"].get<std::string>() + " | | | | |\n";
+  line += Fmt("%.3g", row["median_seconds"].get<double>()) + " | " + Fmt("%.12f", row["energy"].get<double>()) + " | ";
+  if (row.contains("gradient_error"))
+    line += Fmt("%.1e", row["gradient_error"].get<double>()) + (row["reference"] == "float128" ? "" : " (vs long double)");
+  else
+    line += "no reference";
+  return line + " | " + std::to_string(row["overflowed_cells"].get<long long>()) + " / " +
+         std::to_string(row["cells"].get<long long>()) + " | " + Fmt("%.0f MB", row["peak_memory_mb"].get<double>()) +
+         " |\n";
+}
+
+// `quijibo bench precision`: every grid x root count x configuration, then the JSON and the table.
+void BenchPrecision(const PrecisionArgs& a) {
+  const std::vector<int> roots = a.quick ? std::vector<int>{108} : ParseList(a.roots, "roots");
+  const std::vector<int> grids = a.quick ? std::vector<int>{25} : ParseList(a.grids, "grids");
+  // float128 first: it is the reference for the gradient error.
+  const std::vector<PrecisionConfig> configs = {{"cached", "float128"}, {"cached", "long-double"},
+                                                {"cached", "double"},   {"cached", "float"},
+                                                {"loglinear", "double"}};
+  // Seconds per (cell x root) of one evaluation, learned from the cases run so far.
+  std::map<std::string, double> rate;
+  json results = json::array();
+  std::string md =
+      "| roots (top/bottom) | grid | evaluator | precision | s / eval (median) | energy psi | "
+      "max rel. gradient error | overflowed cells | peak memory |\n"
+      "|---|---|---|---|---|---|---|---|---|\n";
+  const double total_cases = double(roots.size() * grids.size() * configs.size());
+  Progress progress("bench precision", total_cases, false);
+  int done = 0;
+  for (int n : grids) {
+    for (int r : roots) {
+      const Split split = SplitFor(r);
+      PrecisionReference ref;
+      for (const PrecisionConfig& c : configs) {
+        progress.update(done++, std::to_string(r) + " roots, " + std::to_string(n) + "^3, " + c.evaluator + " " +
+                                    c.precision);
+        json row = {{"roots", r}, {"top", split.top}, {"bottom", split.bottom}, {"grid", n},
+                    {"evaluator", c.evaluator}, {"precision", c.precision}};
+        MeasurePrecisionCase(a, r, n, c, rate, ref, row);
+        results.push_back(row);
+        md += PrecisionLine(row, r, split, n, c);
+      }
+    }
+  }
+  progress.finish();
+  char host[256] = {0};
+  ::gethostname(host, sizeof host - 1);
+  const std::time_t now = std::time(nullptr);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
+  const json doc = {{"benchmark", "precision"}, {"date", date}, {"cores", int(::sysconf(_SC_NPROCESSORS_ONLN))},
+                    {"repeats", a.repeats}, {"exponent_range", {a.exponent_min, a.exponent_max}},
+                    {"seed", a.seed}, {"results", results}};
+  const std::string header = "Precision benchmark, " + std::string(date) + ", " +
+                             std::to_string(int(::sysconf(_SC_NPROCESSORS_ONLN))) + " cores, median of " +
+                             std::to_string(a.repeats) + " evaluations; gradient error = max_k |g_k - ref_k| / "
+                             "max_k |ref_k| against cached float128 (or long double where float128 was "
+                             "skipped); seeded random maps, exponents in [" +
+                             Fmt("%g", a.exponent_min) + ", " + Fmt("%g", a.exponent_max) +
+                             "], sphere target, layer weights, alpha 10.\n\n";
+  if (!a.out_json.empty()) WriteOutput(a.out_json, doc.dump(1) + "\n");
+  if (!a.out_md.empty()) WriteOutput(a.out_md, header + md);
+  std::fputs((header + md).c_str(), stdout);
+}
+
 }  // namespace
 
 void AddBenchCommand(CLI::App& app) {
@@ -147,16 +291,7 @@ void AddBenchCommand(CLI::App& app) {
   b->require_subcommand(1);
 
   // precision
-  struct Args {
-    std::string roots = "108,331,708", grids = "25,50,97", out_json = "bench-precision.json",
-                out_md = "bench-precision.md";
-    int repeats = 3;
-    double max_seconds = 600;
-    bool quick = false;
-    std::uint64_t seed = 1;
-    double exponent_min = 1.0, exponent_max = 5.0;
-  };
-  auto a = std::make_shared<Args>();
+  auto a = std::make_shared<PrecisionArgs>();
   CLI::App* p = b->add_subcommand(
       "precision",
       "Seconds per energy+gradient evaluation, energy, gradient error against float128, overflowed "
@@ -175,132 +310,7 @@ void AddBenchCommand(CLI::App& app) {
   p->add_option("--exponent-max", a->exponent_max, "Largest random exponent")->capture_default_str();
   p->add_option("--json", a->out_json, "Write the results as JSON here")->capture_default_str();
   p->add_option("--markdown", a->out_md, "Write the Markdown table here")->capture_default_str();
-  p->callback([a] {
-    const std::vector<int> roots = a->quick ? std::vector<int>{108} : ParseList(a->roots, "roots");
-    const std::vector<int> grids = a->quick ? std::vector<int>{25} : ParseList(a->grids, "grids");
-    struct Config {
-      std::string evaluator, precision;
-    };
-    // float128 first: it is the reference for the gradient error.
-    const std::vector<Config> configs = {{"cached", "float128"}, {"cached", "long-double"},
-                                         {"cached", "double"},   {"cached", "float"},
-                                         {"loglinear", "double"}};
-    // Seconds per (cell x root) of one evaluation, learned from the cases run so far.
-    std::map<std::string, double> rate;
-    json results = json::array();
-    std::string md =
-        "| roots (top/bottom) | grid | evaluator | precision | s / eval (median) | energy psi | "
-        "max rel. gradient error | overflowed cells | peak memory |\n"
-        "|---|---|---|---|---|---|---|---|---|\n";
-    const double total_cases = double(roots.size() * grids.size() * configs.size());
-    Progress progress("bench precision", total_cases, false);
-    int done = 0;
-    for (int n : grids) {
-      for (int r : roots) {
-        const Split split = SplitFor(r);
-        json ref_grad;
-        std::string ref_name;
-        long double ref_energy = 0;
-        for (const Config& c : configs) {
-          progress.update(done++, std::to_string(r) + " roots, " + std::to_string(n) + "^3, " + c.evaluator +
-                                      " " + c.precision);
-          const std::string key = c.evaluator + "/" + c.precision;
-          const double work = double(n) * n * n * r;
-          json row = {{"roots", r}, {"top", split.top}, {"bottom", split.bottom}, {"grid", n},
-                      {"evaluator", c.evaluator}, {"precision", c.precision}};
-          const double predicted = rate.count(key) ? rate[key] * work * (a->repeats + 0.5) : 0.0;
-          if (predicted > a->max_seconds) {
-            row["skipped"] = "predicted " + FormatDuration(predicted) + " > --max-seconds " +
-                             FormatDuration(a->max_seconds);
-          } else {
-            CaseSpec s;
-            s.roots = r;
-            s.grid = n;
-            s.repeats = a->repeats;
-            s.evaluator = c.evaluator;
-            s.precision = c.precision;
-            s.seed = a->seed;
-            s.exponent_min = a->exponent_min;
-            s.exponent_max = a->exponent_max;
-            const CaseResult res = Spawn(s);
-            if (!res.ok) {
-              row["skipped"] = "case failed: " + res.error;
-            } else {
-              const json& rep = res.report;
-              row["median_seconds"] = rep["median_seconds"];
-              row["seconds"] = rep["seconds"];
-              row["setup_seconds"] = rep["setup_seconds"];
-              row["energy"] = rep["energy"];
-              row["energy_exact"] = rep["energy_exact"];
-              row["overflowed_cells"] = rep["overflowed_cells"];
-              row["singular_cells"] = rep["singular_cells"];
-              row["cells"] = rep["cells"];
-              row["peak_memory_mb"] = res.peak_mb;
-              if (rep.contains("storage")) row["storage"] = rep["storage"];
-              rate[key] = std::max(rep["median_seconds"].get<double>(), 1e-6) / work;
-              if (ref_grad.is_null() && c.evaluator == "cached" && rep["overflowed_cells"] == 0 &&
-                  (c.precision == "float128" || c.precision == "long-double")) {
-                ref_grad = rep["gradient_exact"];
-                ref_name = c.precision;
-                ref_energy = ParseExact(rep["energy_exact"]);
-              }
-              if (!ref_grad.is_null()) {
-                long double gmax = 0, emax = 0;
-                const json& g = rep["gradient_exact"];
-                for (std::size_t k = 0; k < g.size(); ++k) {
-                  const long double ref = ParseExact(ref_grad[k]);
-                  gmax = std::max(gmax, std::fabs(ref));
-                  emax = std::max(emax, std::fabs(ParseExact(g[k]) - ref));
-                }
-                row["gradient_error"] = double(gmax > 0 ? emax / gmax : emax);
-                row["energy_error"] = double(std::fabs(ParseExact(rep["energy_exact"]) - ref_energy) /
-                                             std::max(std::fabs(ref_energy), 1e-300L));
-                row["reference"] = ref_name;
-              }
-            }
-          }
-          results.push_back(row);
-          std::string line = "| " + std::to_string(r) + " (" + std::to_string(split.top) + "/" +
-                             std::to_string(split.bottom) + ") | " + std::to_string(n) + "³ | " + c.evaluator +
-                             " | " + c.precision + " | ";
-          if (row.contains("skipped")) {
-            line += "skipped: " + row["skipped"].get<std::string>() + " | | | | |\n";
-          } else {
-            line += Fmt("%.3g", row["median_seconds"].get<double>()) + " | " +
-                    Fmt("%.12f", row["energy"].get<double>()) + " | ";
-            if (row.contains("gradient_error"))
-              line += Fmt("%.1e", row["gradient_error"].get<double>()) +
-                      (row["reference"] == "float128" ? "" : " (vs long double)");
-            else
-              line += "no reference";
-            line += " | " + std::to_string(row["overflowed_cells"].get<long long>()) + " / " +
-                    std::to_string(row["cells"].get<long long>()) + " | " +
-                    Fmt("%.0f MB", row["peak_memory_mb"].get<double>()) + " |\n";
-          }
-          md += line;
-        }
-      }
-    }
-    progress.finish();
-    char host[256] = {0};
-    ::gethostname(host, sizeof host - 1);
-    const std::time_t now = std::time(nullptr);
-    char date[32];
-    std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
-    const json doc = {{"benchmark", "precision"}, {"date", date}, {"cores", int(::sysconf(_SC_NPROCESSORS_ONLN))},
-                      {"repeats", a->repeats}, {"exponent_range", {a->exponent_min, a->exponent_max}},
-                      {"seed", a->seed}, {"results", results}};
-    const std::string header = "Precision benchmark, " + std::string(date) + ", " +
-                               std::to_string(int(::sysconf(_SC_NPROCESSORS_ONLN))) + " cores, median of " +
-                               std::to_string(a->repeats) + " evaluations; gradient error = max_k |g_k - ref_k| / "
-                               "max_k |ref_k| against cached float128 (or long double where float128 was "
-                               "skipped); seeded random maps, exponents in [" +
-                               Fmt("%g", a->exponent_min) + ", " + Fmt("%g", a->exponent_max) +
-                               "], sphere target, layer weights, alpha 10.\n\n";
-    if (!a->out_json.empty()) WriteOutput(a->out_json, doc.dump(1) + "\n");
-    if (!a->out_md.empty()) WriteOutput(a->out_md, header + md);
-    std::fputs((header + md).c_str(), stdout);
-  });
+  p->callback([a] { BenchPrecision(*a); });
 
   // precision-case: one case, run by `precision` in a child process.
   auto s = std::make_shared<CaseSpec>();

@@ -12,6 +12,7 @@
 #include "quijibo/error.h"
 #include "quijibo/frame.h"
 #include "quijibo/io.h"
+#include "quijibo/progress.h"
 #include "quijibo/target.h"
 
 namespace quijibo::cli {
@@ -136,6 +137,13 @@ void AddTargetCommand(CLI::App& app) {
     CreateParentFolder(*out);
     WriteGrid(*out, grid);
   });
+}
+
+void SetUpApp(CLI::App& app, const std::string& name, bool& quiet, bool silent) {
+  app.set_version_flag("--version", name + " " QUIJIBO_VERSION);
+  app.require_subcommand(1);
+  app.add_flag("-q,--quiet", quiet, "No progress on stderr");
+  app.parse_complete_callback([&quiet, silent] { Progress::globally_quiet() = quiet || silent; });
 }
 
 }  // namespace quijibo::cli

@@ -47,4 +47,9 @@ ScalarGrid LoadTarget(const std::string& spec, int resolution);
 // Writes text to path atomically, or to stdout when path is empty or "-".
 void WriteOutput(const std::string& path, const std::string& text);
 
+// The top of a program's command line: `--version` ("<name> <version>", the project's), a required
+// subcommand, and `-q,--quiet` into `quiet` and the progress lines' switch (`silent`: this process
+// shows no progress whatever the flag says, as MPI's ranks other than 0).
+void SetUpApp(CLI::App& app, const std::string& name, bool& quiet, bool silent = false);
+
 }  // namespace quijibo::cli

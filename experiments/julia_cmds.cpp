@@ -89,7 +89,7 @@ struct JuliaArgs {
       o.julia.placement = SampleTransform::AxisAngle({o.rotation[0], o.rotation[1], o.rotation[2]}, o.rotation[3],
                                                      box_center);
     }
-    if (auto why = o.julia.validate(); !why.empty()) throw Error(why);
+    if (auto why = o.julia.Validate(); !why.empty()) throw Error(why);
   }
 };
 
@@ -176,7 +176,7 @@ void AddPicture(CLI::App& app) {
         const auto b = ParseBox(box);
         v.min_corner = {b[0], b[1], b[2]}, v.max_corner = {b[3], b[4], b[5]};
       }
-      if (auto why = v.validate(); !why.empty()) throw Error("picture: " + why);
+      if (auto why = v.Validate(); !why.empty()) throw Error("picture: " + why);
       return v;
     }
   };

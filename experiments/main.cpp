@@ -27,11 +27,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "quijibo: quaternion Julia sets shaped like a mesh (QUIJIBO, Kim 2015), with the shape\n"
       "modulus (2023) and portals (2024) for comparison. See README.md and docs/."};
-  app.set_version_flag("--version", "quijibo 0.1.0");
-  app.require_subcommand(1);
   bool quiet = false;
-  app.add_flag("-q,--quiet", quiet, "No progress on stderr");
-  app.parse_complete_callback([&] { quijibo::Progress::globally_quiet() = quiet; });
+  quijibo::cli::SetUpApp(app, "quijibo", quiet);
   quijibo::cli::AddCommands(app);
   AddQuietEverywhere(app, quiet);
   try {

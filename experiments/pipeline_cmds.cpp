@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -11,6 +12,7 @@
 #include "experiments/bind.h"
 #include "experiments/cli.h"
 #include "experiments/pipeline/initial.h"
+#include "experiments/pipeline/product.h"
 #include "experiments/pipeline/target.h"
 #include "mesh/normalize.h"
 #include "mesh/sdf.h"
@@ -28,8 +30,9 @@ namespace quijibo::cli {
 
 using nlohmann::json;
 
-void AddModuleCommands(CLI::App& app) {
-  // sdf
+namespace {
+
+void AddSdfCommand(CLI::App& app) {
   auto so = std::make_shared<mesh::SdfCommandOptions>();
   CLI::App* sdf = app.add_subcommand(
       "sdf", "Signed distance field of a mesh (OBJ, PLY, STL, OFF) on the target grid, as .qgrid (and .vdb)");
@@ -57,8 +60,10 @@ void AddModuleCommands(CLI::App& app) {
   sdf->add_flag("--refuse-open", [so](std::int64_t) { so->sdf.allow_open = false; },
                 "Refuse meshes with holes instead of signing them by winding numbers");
   sdf->callback([so] { mesh::RunSdfCommand(*so); });
+}
 
-  // monopoles: the target and initial-guess stages, bound to their Options.
+// monopoles: the target and initial-guess stages, bound to their Options.
+void AddMonopolesCommand(CLI::App& app) {
   struct Args {
     std::string mesh, out;
     pipeline::TargetOptions target;
@@ -91,15 +96,103 @@ void AddModuleCommands(CLI::App& app) {
     std::printf("%s\n", guess.summary.dump(1).c_str());
   });
 
-  // bench stages: the monopole stage's parts, timed on real meshes.
-  struct BenchArgs {
-    std::vector<std::string> meshes{"data/bunny.obj", "data/tooth.obj"};
-    int resolution = kDefaultTargetResolution, repeats = 3;
-    std::string fit_target =
-        monopole::MonopoleOptions{}.target == monopole::MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
-    std::string out_md, out_json;
+}
+
+struct StageBenchArgs {
+  std::vector<std::string> meshes{"data/bunny.obj", "data/tooth.obj"};
+  int resolution = kDefaultTargetResolution, repeats = 3;
+  std::string fit_target =
+      monopole::MonopoleOptions{}.target == monopole::MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
+  std::string out_md, out_json;
+};
+
+// The stages `bench stages` times, in the table's order.
+constexpr const char* kStageNames[] = {"read", "sdf", "bem", "shell", "potential", "candidates", "fit", "ln_C_scan", "total"};
+
+// One mesh's repeats: the seconds of every stage (kStageNames) per repeat, into `row` as medians
+// and a line of the Markdown table.
+std::string BenchStagesOf(const StageBenchArgs& b, const std::string& path, json& row) {
+  using Clock = std::chrono::steady_clock;
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
   };
-  auto b = std::make_shared<BenchArgs>();
+  std::vector<std::vector<double>> t(std::size(kStageNames));
+  monopole::MonopoleResult last;
+  std::int64_t triangles = 0;
+  RationalMap map;
+  for (int r = 0; r < b.repeats; ++r) {
+    const auto t0 = Clock::now();
+    const mesh::TriangleMesh user = mesh::ReadMesh(path);
+    const FractalFrame frame = mesh::NormalizationFor(user);
+    const mesh::TriangleMesh mesh = mesh::ToFractalFrame(user, frame);
+    t[0].push_back(pipeline::Since(t0));
+    auto t1 = Clock::now();
+    const ScalarGrid sdf = mesh::SignedDistance(mesh, TargetGridFrame(b.resolution, frame));
+    t[1].push_back(pipeline::Since(t1));
+    monopole::MonopoleOptions mo;
+    mo.target = b.fit_target == "reference" ? monopole::MonopoleTarget::kOneMinusPotential
+                                            : monopole::MonopoleTarget::kPotential;
+    last = monopole::FitMonopoles(mesh.vertices, mesh.triangles, sdf, mo);
+    t[2].push_back(last.seconds.bem), t[3].push_back(last.seconds.shell), t[4].push_back(last.seconds.potential);
+    t[5].push_back(last.seconds.sampling), t[6].push_back(last.seconds.fit);
+    t1 = Clock::now();
+    map = monopole::InitialMap(last.monopoles, frame, sdf, monopole::InitialGuessOptions{});
+    t[7].push_back(pipeline::Since(t1));
+    t[8].push_back(pipeline::Since(t0));
+    triangles = std::int64_t(mesh.triangles.size());
+  }
+  row = {{"mesh", path}, {"triangles", triangles}, {"bem_elements", last.bem.elements},
+         {"top_roots", map.top_count()}, {"bottom_roots", map.bottom_count()},
+         {"relative_residual", last.fit.final_relative_residual}};
+  std::string md = "| " + std::filesystem::path(path).filename().string() + " | " + std::to_string(triangles) + " | " +
+                   std::to_string(last.bem.elements) + " | " + std::to_string(map.top_count()) + "/" +
+                   std::to_string(map.bottom_count()) + " |";
+  for (std::size_t i = 0; i < std::size(kStageNames); ++i) {
+    const double m = median(t[i]);
+    row["median_seconds"][kStageNames[i]] = m;
+    char buf[32];
+    std::snprintf(buf, sizeof buf, " %.2f |", m);
+    md += buf;
+  }
+  return md + "\n";
+}
+
+// `quijibo bench stages`: every mesh's stages, then the table and the JSON.
+void BenchStages(const StageBenchArgs& b) {
+  std::string md = "| mesh | triangles | BEM elements | monopoles (top/bottom) |";
+  for (const char* n : kStageNames) md += std::string(" ") + n + " s |";
+  md += "\n|---|---|---|---|";
+  for (std::size_t i = 0; i < std::size(kStageNames); ++i) md += "---|";
+  md += "\n";
+  json results = json::array();
+  for (const std::string& path : b.meshes) {
+    json row;
+    md += BenchStagesOf(b, path, row);
+    results.push_back(row);
+  }
+  rusage ru{};
+  ::getrusage(RUSAGE_SELF, &ru);
+  const std::time_t now = std::time(nullptr);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
+  const int cores = int(::sysconf(_SC_NPROCESSORS_ONLN));
+  const std::string header = "Initial-guess stages, " + std::string(date) + ", " + std::to_string(cores) +
+                             " cores, " + std::to_string(b.resolution) + "^3 target, fit of " +
+                             (b.fit_target == "reference" ? "1 - P" : "P") + ", median of " +
+                             std::to_string(b.repeats) + " runs; peak memory " +
+                             std::to_string(ru.ru_maxrss / 1024) + " MB.\n\n";
+  const json doc = {{"benchmark", "stages"}, {"date", date}, {"cores", cores}, {"resolution", b.resolution},
+                    {"repeats", b.repeats}, {"fit_target", b.fit_target},
+                    {"peak_memory_mb", ru.ru_maxrss / 1024.0}, {"results", results}};
+  if (!b.out_md.empty()) WriteFileAtomically(b.out_md, header + md);
+  if (!b.out_json.empty()) WriteFileAtomically(b.out_json, doc.dump(1) + "\n");
+  std::fputs((header + md).c_str(), stdout);
+}
+
+// bench stages: the monopole stage's parts, timed on real meshes.
+void AddBenchStagesCommand(CLI::App& app) {
+  auto b = std::make_shared<StageBenchArgs>();
   CLI::App* bench = app.get_subcommand("bench");
   CLI::App* st = bench->add_subcommand(
       "stages", "Seconds of each part of the initial guess (mesh read, SDF, BEM, shell, P on the shell, "
@@ -111,80 +204,15 @@ void AddModuleCommands(CLI::App& app) {
       ->capture_default_str()->check(CLI::IsMember({"reference", "potential"}));
   st->add_option("--markdown", b->out_md, "Also write the Markdown table here");
   st->add_option("--json", b->out_json, "Also write the results as JSON here");
-  st->callback([b] {
-    using Clock = std::chrono::steady_clock;
-    auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
-    auto median = [](std::vector<double> v) {
-      std::sort(v.begin(), v.end());
-      return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-    };
-    const char* names[] = {"read", "sdf", "bem", "shell", "potential", "candidates", "fit", "ln_C_scan", "total"};
-    std::string md = "| mesh | triangles | BEM elements | monopoles (top/bottom) |";
-    for (const char* n : names) md += std::string(" ") + n + " s |";
-    md += "\n|---|---|---|---|";
-    for (std::size_t i = 0; i < std::size(names); ++i) md += "---|";
-    md += "\n";
-    json results = json::array();
-    for (const std::string& path : b->meshes) {
-      std::vector<std::vector<double>> t(std::size(names));
-      monopole::MonopoleResult last;
-      std::int64_t triangles = 0;
-      RationalMap map;
-      for (int r = 0; r < b->repeats; ++r) {
-        const auto t0 = Clock::now();
-        const mesh::TriangleMesh user = mesh::ReadMesh(path);
-        const FractalFrame frame = mesh::NormalizationFor(user);
-        const mesh::TriangleMesh mesh = mesh::ToFractalFrame(user, frame);
-        t[0].push_back(since(t0));
-        auto t1 = Clock::now();
-        const ScalarGrid sdf = mesh::SignedDistance(mesh, TargetGridFrame(b->resolution, frame));
-        t[1].push_back(since(t1));
-        monopole::MonopoleOptions mo;
-        mo.target = b->fit_target == "reference" ? monopole::MonopoleTarget::kOneMinusPotential
-                                                 : monopole::MonopoleTarget::kPotential;
-        last = monopole::FitMonopoles(mesh.vertices, mesh.triangles, sdf, mo);
-        t[2].push_back(last.seconds.bem), t[3].push_back(last.seconds.shell), t[4].push_back(last.seconds.potential);
-        t[5].push_back(last.seconds.sampling), t[6].push_back(last.seconds.fit);
-        t1 = Clock::now();
-        map = monopole::InitialMap(last.monopoles, frame, sdf, monopole::InitialGuessOptions{});
-        t[7].push_back(since(t1));
-        t[8].push_back(since(t0));
-        triangles = std::int64_t(mesh.triangles.size());
-      }
-      json row = {{"mesh", path}, {"triangles", triangles}, {"bem_elements", last.bem.elements},
-                  {"top_roots", map.top_count()}, {"bottom_roots", map.bottom_count()},
-                  {"relative_residual", last.fit.final_relative_residual}};
-      md += "| " + std::filesystem::path(path).filename().string() + " | " + std::to_string(triangles) + " | " +
-            std::to_string(last.bem.elements) + " | " + std::to_string(map.top_count()) + "/" +
-            std::to_string(map.bottom_count()) + " |";
-      for (std::size_t i = 0; i < std::size(names); ++i) {
-        const double m = median(t[i]);
-        row["median_seconds"][names[i]] = m;
-        char buf[32];
-        std::snprintf(buf, sizeof buf, " %.2f |", m);
-        md += buf;
-      }
-      md += "\n";
-      results.push_back(row);
-    }
-    rusage ru{};
-    ::getrusage(RUSAGE_SELF, &ru);
-    const std::time_t now = std::time(nullptr);
-    char date[32];
-    std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
-    const int cores = int(::sysconf(_SC_NPROCESSORS_ONLN));
-    const std::string header = "Initial-guess stages, " + std::string(date) + ", " + std::to_string(cores) +
-                               " cores, " + std::to_string(b->resolution) + "^3 target, fit of " +
-                               (b->fit_target == "reference" ? "1 - P" : "P") + ", median of " +
-                               std::to_string(b->repeats) + " runs; peak memory " +
-                               std::to_string(ru.ru_maxrss / 1024) + " MB.\n\n";
-    const json doc = {{"benchmark", "stages"}, {"date", date}, {"cores", cores}, {"resolution", b->resolution},
-                      {"repeats", b->repeats}, {"fit_target", b->fit_target},
-                      {"peak_memory_mb", ru.ru_maxrss / 1024.0}, {"results", results}};
-    if (!b->out_md.empty()) WriteFileAtomically(b->out_md, header + md);
-    if (!b->out_json.empty()) WriteFileAtomically(b->out_json, doc.dump(1) + "\n");
-    std::fputs((header + md).c_str(), stdout);
-  });
+  st->callback([b] { BenchStages(*b); });
+}
+
+}  // namespace
+
+void AddModuleCommands(CLI::App& app) {
+  AddSdfCommand(app);
+  AddMonopolesCommand(app);
+  AddBenchStagesCommand(app);
 }
 
 }  // namespace quijibo::cli

@@ -13,12 +13,12 @@
 
 namespace quijibo::mesh {
 
-std::string FidelityOptions::validate() const {
+std::string FidelityOptions::Validate() const {
   if (lattice < 8 || lattice > 512) return "lattice must be in [8, 512]";
   if (!(extend >= 0 && extend <= 2)) return "extend must be in [0, 2]";
   if (surface_samples < 100 || surface_samples > 10000000) return "surface samples must be in [100, 1e7]";
   if (julia.iterations > 0)
-    if (auto why = julia.validate(); !why.empty()) return why;
+    if (auto why = julia.Validate(); !why.empty()) return why;
   if (!(detail >= 0 && detail <= 100)) return "detail must be in [0, 100]";
   if (closing < 0 || closing > 16) return "closing must be in [0, 16] cells";
   return {};
@@ -102,7 +102,7 @@ std::vector<char> Close(const std::vector<char>& set, int n, int r) {
 }
 
 Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& o) {
-  if (auto why = o.validate(); !why.empty()) throw Error("fidelity: " + why);
+  if (auto why = o.Validate(); !why.empty()) throw Error("fidelity: " + why);
   const double b = map.frame.fractal_radius * (1.0 - 2.0 * map.frame.padding) / 2;  // half side of B
   const double half = b * (1.0 + 2.0 * o.extend);
   const int n = o.lattice;
@@ -242,7 +242,7 @@ std::vector<Vec3> SampleSurface(const TriangleMesh& m, int count, std::uint64_t 
 
 void MeasureSurfaceDistances(const TriangleMesh& julia, const TriangleMesh& shape, const FidelityOptions& o,
                              Fidelity& f) {
-  if (auto why = o.validate(); !why.empty()) throw Error("fidelity: " + why);
+  if (auto why = o.Validate(); !why.empty()) throw Error("fidelity: " + why);
   Vec3 lo = shape.vertices.at(0), hi = lo;
   for (const Vec3& v : shape.vertices)
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
@@ -252,12 +252,7 @@ void MeasureSurfaceDistances(const TriangleMesh& julia, const TriangleMesh& shap
                           on_shape = SampleSurface(shape, o.surface_samples, o.seed + 1);
   if (on_julia.empty() || on_shape.empty()) throw Error("fidelity: a mesh without area");
   const std::vector<double> ab = UnsignedDistance(shape, on_julia), ba = UnsignedDistance(julia, on_shape);
-  auto mean = [](const std::vector<double>& v) {
-    double s = 0;
-    for (double x : v) s += x;
-    return s / double(v.size());
-  };
-  f.chamfer = 0.5 * (mean(ab) + mean(ba)) / diagonal;
+  f.chamfer = 0.5 * (Mean(ab) + Mean(ba)) / diagonal;
   f.hausdorff = std::max(*std::max_element(ab.begin(), ab.end()), *std::max_element(ba.begin(), ba.end())) / diagonal;
 }
 
@@ -300,6 +295,10 @@ std::vector<double> NearestPointDistances(const std::vector<Vec3>& a, const std:
     out[n] = std::sqrt(best2);
   }
   return out;
+}
+
+SampleChamfer MeasureSampleChamfer(const std::vector<Vec3>& set, const std::vector<Vec3>& target) {
+  return {Mean(NearestPointDistances(set, target)), Mean(NearestPointDistances(target, set))};
 }
 
 double Mean(const std::vector<double>& v) {

@@ -44,7 +44,7 @@ struct FidelityOptions {
   double iso = 0.0;
   int surface_samples = 20000;  // points per mesh for Chamfer and Hausdorff
   std::uint64_t seed = 1;
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 struct SetFigures {
@@ -88,6 +88,15 @@ std::vector<Vec3> SampleSurface(const TriangleMesh& mesh, int count, std::uint64
 // Chamfer and Hausdorff of `julia` against `shape` (same frame), filled into `f`.
 void MeasureSurfaceDistances(const TriangleMesh& julia, const TriangleMesh& shape, const FidelityOptions& options,
                              Fidelity& f);
+
+// The Chamfer of point samples (`quijibo compare`): the mean distance from each sample of a set to
+// the nearest sample of its target (`to_target`) and back (`from_target`), and their sum.
+// Nearest samples, not the nearest surface point as MeasureSurfaceDistances; not normalized.
+struct SampleChamfer {
+  double to_target = 0, from_target = 0;
+  double sum() const { return to_target + from_target; }
+};
+SampleChamfer MeasureSampleChamfer(const std::vector<Vec3>& set, const std::vector<Vec3>& target);
 
 // For each point of `a`, the distance to the nearest point of `b` (a uniform hash grid over b;
 // infinity when b is empty).

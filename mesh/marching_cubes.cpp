@@ -147,67 +147,75 @@ const CaseTable& Table() {
 }
 
 
-// Meshes one tile. `active` (per block of the tile, x fastest) says which blocks to mesh.
-void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& geo, const std::array<int, 3>& c0,
-              const std::array<int, 3>& c1, const std::vector<char>& active, bool want_band, Counters& counters,
-              TilePiece& out) {
-  const MeshLattice& l = geo.lattice;
-  const auto& E = Edges();
-  const auto& table = Table();
-  const double iso = field.iso;
-  const int bc = o.block_cells;
-  const std::array<int, 3> n{c1[0] - c0[0], c1[1] - c0[1], c1[2] - c0[2]};  // cells
-  const std::array<int, 3> nn{n[0] + 1, n[1] + 1, n[2] + 1};                 // nodes
-  const std::array<int, 3> nb{(n[0] + bc - 1) / bc, (n[1] + bc - 1) / bc, (n[2] + bc - 1) / bc};
-  auto local = [&](int i, int j, int k) { return std::size_t(i) + std::size_t(nn[0]) * (std::size_t(j) + std::size_t(nn[1]) * k); };
-  const std::size_t node_count = std::size_t(nn[0]) * nn[1] * nn[2];
+// A tile's cells and nodes: n cells, nn nodes and nb blocks per axis; nodes indexed x fastest.
+struct TileShape {
+  std::array<int, 3> n, nn, nb;
+  TileShape(const std::array<int, 3>& c0, const std::array<int, 3>& c1, int bc)
+      : n{c1[0] - c0[0], c1[1] - c0[1], c1[2] - c0[2]},
+        nn{n[0] + 1, n[1] + 1, n[2] + 1},
+        nb{(n[0] + bc - 1) / bc, (n[1] + bc - 1) / bc, (n[2] + bc - 1) / bc} {}
+  std::size_t local(int i, int j, int k) const {
+    return std::size_t(i) + std::size_t(nn[0]) * (std::size_t(j) + std::size_t(nn[1]) * k);
+  }
+  std::size_t node_count() const { return std::size_t(nn[0]) * nn[1] * nn[2]; }
+};
 
-  // Nodes needed: those of active blocks.
-  std::vector<char> needed(node_count, 0);
-  for (int bk = 0; bk < nb[2]; ++bk)
-    for (int bj = 0; bj < nb[1]; ++bj)
-      for (int bi = 0; bi < nb[0]; ++bi) {
-        if (!active[std::size_t(bi) + std::size_t(nb[0]) * (bj + std::size_t(nb[1]) * bk)]) continue;
-        for (int k = bk * bc; k <= std::min((bk + 1) * bc, n[2]); ++k)
-          for (int j = bj * bc; j <= std::min((bj + 1) * bc, n[1]); ++j)
-            for (int i = bi * bc; i <= std::min((bi + 1) * bc, n[0]); ++i) needed[local(i, j, k)] = 1;
+// The field at the nodes of the active blocks (NaN elsewhere), evaluated in one batch.
+std::vector<double> TileNodeValues(const BatchField& field, const MeshLattice& l, const std::array<int, 3>& c0,
+                                   const TileShape& s, int bc, const std::vector<char>& active, Counters& counters) {
+  std::vector<char> needed(s.node_count(), 0);
+  for (int bk = 0; bk < s.nb[2]; ++bk)
+    for (int bj = 0; bj < s.nb[1]; ++bj)
+      for (int bi = 0; bi < s.nb[0]; ++bi) {
+        if (!active[std::size_t(bi) + std::size_t(s.nb[0]) * (bj + std::size_t(s.nb[1]) * bk)]) continue;
+        for (int k = bk * bc; k <= std::min((bk + 1) * bc, s.n[2]); ++k)
+          for (int j = bj * bc; j <= std::min((bj + 1) * bc, s.n[1]); ++j)
+            for (int i = bi * bc; i <= std::min((bi + 1) * bc, s.n[0]); ++i) needed[s.local(i, j, k)] = 1;
       }
   std::vector<std::uint32_t> which;
   std::vector<Vec3> points;
-  for (int k = 0; k < nn[2]; ++k)
-    for (int j = 0; j < nn[1]; ++j)
-      for (int i = 0; i < nn[0]; ++i)
-        if (needed[local(i, j, k)]) {
-          which.push_back(std::uint32_t(local(i, j, k)));
+  for (int k = 0; k < s.nn[2]; ++k)
+    for (int j = 0; j < s.nn[1]; ++j)
+      for (int i = 0; i < s.nn[0]; ++i)
+        if (needed[s.local(i, j, k)]) {
+          which.push_back(std::uint32_t(s.local(i, j, k)));
           points.push_back(l.node(c0[0] + i, c0[1] + j, c0[2] + k));
         }
-  std::vector<double> value(node_count, std::numeric_limits<double>::quiet_NaN());
-  {
-    std::vector<double> v(points.size());
-    Evaluate(field, points.data(), points.size(), v.data(), counters.nodes, counters);
-    for (std::size_t i = 0; i < which.size(); ++i) value[which[i]] = v[i];
-  }
-  needed = {};
+  std::vector<double> value(s.node_count(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<double> v(points.size());
+  Evaluate(field, points.data(), points.size(), v.data(), counters.nodes, counters);
+  for (std::size_t i = 0; i < which.size(); ++i) value[which[i]] = v[i];
+  return value;
+}
 
-  // Cells: triangles and the crossing edges they need.
-  std::vector<std::int32_t> vertex_of(3 * node_count, -1);
-  struct Pending {
-    Vec3 a, b;
-    double fa;
-  };
-  std::vector<Pending> pending;
-  std::vector<char> band_flag;
-  if (want_band) band_flag.assign(node_count, 0);
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i) {
-        if (!active[std::size_t(i / bc) + std::size_t(nb[0]) * (j / bc + std::size_t(nb[1]) * (k / bc))]) continue;
+// A crossing edge whose vertex is still to be placed: its ends, a on the side of value fa.
+struct PendingVertex {
+  Vec3 a, b;
+  double fa;
+};
+
+// The triangles of the active cells by the case table into `out` (with each vertex's global edge
+// id), one pending vertex per crossing edge; `band_flag` (when not empty) marks the nodes of
+// crossing cells.
+std::vector<PendingVertex> TileTriangles(const Geometry& geo, const std::array<int, 3>& c0, const TileShape& s, int bc,
+                                         const std::vector<char>& active, const std::vector<double>& value,
+                                         double iso, std::vector<char>& band_flag, TilePiece& out) {
+  const MeshLattice& l = geo.lattice;
+  const auto& E = Edges();
+  const auto& table = Table();
+  const bool want_band = !band_flag.empty();
+  std::vector<std::int32_t> vertex_of(3 * s.node_count(), -1);
+  std::vector<PendingVertex> pending;
+  for (int k = 0; k < s.n[2]; ++k)
+    for (int j = 0; j < s.n[1]; ++j)
+      for (int i = 0; i < s.n[0]; ++i) {
+        if (!active[std::size_t(i / bc) + std::size_t(s.nb[0]) * (j / bc + std::size_t(s.nb[1]) * (k / bc))]) continue;
         int config = 0;
         for (int c = 0; c < 8; ++c)
-          config |= int(Inside(value[local(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))], iso)) << c;
+          config |= int(Inside(value[s.local(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))], iso)) << c;
         if (config == 0 || config == 255) continue;
         if (want_band)
-          for (int c = 0; c < 8; ++c) band_flag[local(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))] = 1;
+          for (int c = 0; c < 8; ++c) band_flag[s.local(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))] = 1;
         std::array<std::int32_t, 12> vid;
         vid.fill(-1);
         for (const auto& tri : table.triangles[config]) {
@@ -217,14 +225,14 @@ void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& 
             if (vid[e] < 0) {
               const int c = E[e].c0;
               const int ni = i + (c & 1), nj = j + ((c >> 1) & 1), nk = k + ((c >> 2) & 1);
-              const std::size_t key = 3 * local(ni, nj, nk) + std::size_t(E[e].axis);
+              const std::size_t key = 3 * s.local(ni, nj, nk) + std::size_t(E[e].axis);
               if (vertex_of[key] < 0) {
                 vertex_of[key] = std::int32_t(pending.size());
                 std::array<std::int64_t, 3> g{c0[0] + ni, c0[1] + nj, c0[2] + nk};
                 out.vertex_edges.push_back(3 * geo.node_id(g[0], g[1], g[2]) + E[e].axis);
                 const Vec3 a = l.node(g[0], g[1], g[2]);
                 g[E[e].axis] += 1;
-                pending.push_back({a, l.node(g[0], g[1], g[2]), value[local(ni, nj, nk)]});
+                pending.push_back({a, l.node(g[0], g[1], g[2]), value[s.local(ni, nj, nk)]});
               }
               vid[e] = vertex_of[key];
             }
@@ -233,9 +241,13 @@ void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& 
           out.triangles.push_back(t);
         }
       }
-  vertex_of = {};
+  return pending;
+}
 
-  // Bisection on all crossing edges of the tile at once; the vertex is the last midpoint.
+// Bisection on all crossing edges of the tile at once; each vertex is its edge's last midpoint.
+void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vector<PendingVertex>& pending,
+                    Counters& counters, TilePiece& out) {
+  const double iso = field.iso;
   const std::size_t nv = pending.size();
   out.vertex_positions.resize(nv);
   std::vector<char> done(nv, 0);
@@ -248,14 +260,14 @@ void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& 
     for (std::size_t v = 0; v < nv; ++v)
       if (!done[v]) {
         open.push_back(std::uint32_t(v));
-        const Pending& p = pending[v];
+        const PendingVertex& p = pending[v];
         mid.push_back({0.5 * (p.a[0] + p.b[0]), 0.5 * (p.a[1] + p.b[1]), 0.5 * (p.a[2] + p.b[2])});
       }
     if (open.empty()) break;
     fm.resize(mid.size());
     Evaluate(field, mid.data(), mid.size(), fm.data(), counters.bisection, counters);
     for (std::size_t q = 0; q < open.size(); ++q) {
-      Pending& p = pending[open[q]];
+      PendingVertex& p = pending[open[q]];
       out.vertex_positions[open[q]] = mid[q];
       if (std::abs(fm[q] - iso) < o.bisection_tolerance) {
         done[open[q]] = 1;
@@ -267,13 +279,25 @@ void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& 
       }
     }
   }
+}
 
+// Meshes one tile. `active` (per block of the tile, x fastest) says which blocks to mesh.
+void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& geo, const std::array<int, 3>& c0,
+              const std::array<int, 3>& c1, const std::vector<char>& active, bool want_band, Counters& counters,
+              TilePiece& out) {
+  const int bc = o.block_cells;
+  const TileShape s(c0, c1, bc);
+  const std::vector<double> value = TileNodeValues(field, geo.lattice, c0, s, bc, active, counters);
+  std::vector<char> band_flag;
+  if (want_band) band_flag.assign(s.node_count(), 0);
+  std::vector<PendingVertex> pending = TileTriangles(geo, c0, s, bc, active, value, field.iso, band_flag, out);
+  BisectVertices(field, o, pending, counters, out);
   if (want_band)
-    for (int k = 0; k < nn[2]; ++k)
-      for (int j = 0; j < nn[1]; ++j)
-        for (int i = 0; i < nn[0]; ++i)
-          if (band_flag[local(i, j, k)]) {
-            const double v = value[local(i, j, k)];
+    for (int k = 0; k < s.nn[2]; ++k)
+      for (int j = 0; j < s.nn[1]; ++j)
+        for (int i = 0; i < s.nn[0]; ++i)
+          if (band_flag[s.local(i, j, k)]) {
+            const double v = value[s.local(i, j, k)];
             out.band_nodes.push_back({c0[0] + i, c0[1] + j, c0[2] + k});
             out.band_values.push_back(std::isfinite(v) ? float(std::clamp(v, -3.0e38, 3.0e38))
                                                        : (v < 0 ? -std::numeric_limits<float>::max()
@@ -283,7 +307,7 @@ void MeshTile(const BatchField& field, const MeshingOptions& o, const Geometry& 
 
 }  // namespace
 
-std::string MeshingOptions::validate() const {
+std::string MeshingOptions::Validate() const {
   auto pow2 = [](int v) { return v > 0 && (v & (v - 1)) == 0; };
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(min_corner[a]) || !std::isfinite(max_corner[a])) return "box corners must be finite";
@@ -338,7 +362,7 @@ MeshLattice LatticeFor(const MeshingOptions& o) {
 
 
 TilePlan PlanTiles(const BatchField& field, const MeshingOptions& o, const PointsEvaluator& search_evaluate) {
-  if (auto why = o.validate(); !why.empty()) throw Error("meshing: " + why);
+  if (auto why = o.Validate(); !why.empty()) throw Error("meshing: " + why);
   if (!field.evaluate) throw Error("meshing: the field has no evaluate function");
   if (!std::isfinite(field.iso)) throw Error("meshing: the iso value must be finite");
   const auto t0 = std::chrono::steady_clock::now();

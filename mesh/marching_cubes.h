@@ -55,7 +55,7 @@ struct MeshingOptions {
   // crosses, until none is left, so no piece of surface the search touched is cut open.
   bool follow_surface = true;
   bool show_progress = false;         // Progress on stderr (quijibo/progress.h)
-  std::string validate() const;       // empty when valid, else what is wrong
+  std::string Validate() const;       // empty when valid, else what is wrong
 };
 
 struct MeshingSummary {

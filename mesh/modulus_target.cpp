@@ -96,7 +96,7 @@ void ReadModulusParams(const std::string& path, ShapeModulusOptions& so, int sdf
   if (r.has("/alpha")) so.alpha = ParameterFieldFromJson(r, "/alpha", dir, load);
   if (r.has("/beta")) so.beta = ParameterFieldFromJson(r, "/beta", dir, load);
   if (r.has("/origin_offset")) so.origin_offset = ReadVec3(r, "/origin_offset");
-  if (auto why = so.validate(); !why.empty()) r.fail("", why);
+  if (auto why = so.Validate(); !why.empty()) r.fail("", why);
 }
 
 }  // namespace quijibo::mesh

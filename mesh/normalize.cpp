@@ -12,7 +12,7 @@ FractalFrame NormalizationFor(const TriangleMesh& mesh, double padding, double f
   FractalFrame frame;
   frame.padding = padding;
   frame.fractal_radius = fractal_radius;
-  if (const std::string why = frame.validate(); !why.empty())
+  if (const std::string why = frame.Validate(); !why.empty())
     throw Error("normalization: " + why);
   if (mesh.vertices.empty()) throw Error("normalization: mesh has no vertices");
   const BoundingBox box = ComputeBoundingBox(mesh);

@@ -9,7 +9,7 @@
 
 namespace quijibo::mesh {
 
-std::string SliceView::validate() const {
+std::string SliceView::Validate() const {
   if (axis < 0 || axis > 2) return "slice axis must be x, y or z";
   if (size < 8 || size > 16384) return "picture size must be in [8, 16384]";
   for (int a = 0; a < 3; ++a)
@@ -59,7 +59,7 @@ std::vector<double> EvaluateView(const BatchField& field, const SliceView& view)
 
 Image SliceAgainstTarget(const BatchField& field, const ScalarGrid& target, const SliceView& view,
                          SliceAgreement* agreement) {
-  if (auto why = view.validate(); !why.empty()) throw Error("picture: " + why);
+  if (auto why = view.Validate(); !why.empty()) throw Error("picture: " + why);
   const int w = view.width(), h = view.height();
   const std::vector<double> f = EvaluateView(field, view);
   Image img(w, h);
@@ -81,7 +81,7 @@ Image SliceAgainstTarget(const BatchField& field, const ScalarGrid& target, cons
 
 Image ModulusVersorSlice(const RationalMap& map, const JuliaOptions& options, const SliceView& view,
                          double modulus_scale, double iso) {
-  if (auto why = view.validate(); !why.empty()) throw Error("picture: " + why);
+  if (auto why = view.Validate(); !why.empty()) throw Error("picture: " + why);
   if (!(modulus_scale >= 0) || !std::isfinite(modulus_scale)) throw Error("picture: modulus scale must be >= 0");
   const JuliaMap<double> jm(map, options);
   const int w = view.width(), h = view.height();

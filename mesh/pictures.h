@@ -25,7 +25,7 @@ struct SliceView {
   Vec3 min_corner{-2.0, -2.0, -2.0};
   Vec3 max_corner{2.0, 2.0, 2.0};
   int size = 512;  // pixels along the longer side
-  std::string validate() const;
+  std::string Validate() const;
   // The two in-plane axes.
   int u() const { return axis == 0 ? 1 : 0; }
   int v() const { return axis == 2 ? 1 : 2; }

@@ -50,7 +50,7 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
     if (r.has("/alpha")) so.alpha = ParameterFieldFromJson(r, "/alpha", dir, load_mask);
     if (r.has("/beta")) so.beta = ParameterFieldFromJson(r, "/beta", dir, load_mask);
     if (r.has("/origin_offset")) so.origin_offset = ReadVec3(r, "/origin_offset");
-    if (auto why = so.validate(); !why.empty()) r.fail("", why);
+    if (auto why = so.Validate(); !why.empty()) r.fail("", why);
     Versor v;
     if (r.has("/versor")) {
       r.allow_keys("/versor", {"polynomial", "generate", "noise"});
@@ -75,7 +75,7 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
           go.integer_powers = r.boolean_or(g + "/integer_powers", true);
           go.seed = std::uint64_t(r.number_or(g + "/seed", 1));
         }
-        if (auto why = go.validate(); !why.empty()) r.fail(g, why);
+        if (auto why = go.Validate(); !why.empty()) r.fail(g, why);
         v.polynomial = GenerateVersorPolynomial(go);
         s.poly = v.polynomial;
       }

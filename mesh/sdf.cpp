@@ -281,7 +281,7 @@ std::vector<Triangle> Triangles(const TriangleMesh& mesh) {
 
 }  // namespace
 
-std::string SdfOptions::validate() const {
+std::string SdfOptions::Validate() const {
   if (!(winding_beta >= 1.0) || !std::isfinite(winding_beta))
     return "winding_beta must be a finite number >= 1";
   if (!(max_ambiguous_fraction >= 0.0)) return "max_ambiguous_fraction must be >= 0";
@@ -324,9 +324,9 @@ ScalarGrid SignedDistance(const TriangleMesh& mesh_in, const GridFrame& grid,
                           const SdfOptions& options, SdfSummary* summary_out) {
   const auto start = std::chrono::steady_clock::now();
   const std::string& name = options.name;
-  if (const std::string why = options.validate(); !why.empty())
+  if (const std::string why = options.Validate(); !why.empty())
     throw Error(name + ": invalid SDF options: " + why);
-  if (const std::string why = grid.validate(); !why.empty())
+  if (const std::string why = grid.Validate(); !why.empty())
     throw Error(name + ": invalid SDF grid: " + why);
   ValidateMesh(mesh_in, name);
   TriangleMesh mesh = mesh_in;

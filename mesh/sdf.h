@@ -56,7 +56,7 @@ struct SdfOptions {
   std::string name = "mesh";
 
   // Empty when valid, else what is wrong.
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 struct SdfSummary {

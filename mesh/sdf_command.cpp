@@ -12,7 +12,7 @@
 
 namespace quijibo::mesh {
 
-std::string SdfCommandOptions::validate() const {
+std::string SdfCommandOptions::Validate() const {
   if (input.empty()) return "an input mesh is required";
   if (output.empty()) return "an output .qgrid path is required";
   if (!HasExtension(output, ".qgrid")) return output + ": the output must end in .qgrid (the grid format written)";
@@ -25,7 +25,7 @@ std::string SdfCommandOptions::validate() const {
   if (output == vdb_output || output == FrameJsonPathFor(output) ||
       vdb_output == FrameJsonPathFor(output))
     return "the output files must have different paths";
-  return sdf.validate();
+  return sdf.Validate();
 }
 
 std::string FrameJsonPathFor(const std::string& qgrid_path) {
@@ -65,7 +65,7 @@ FractalFrame ReadFrameJson(const std::string& path) {
   frame.scale = r.number("/scale");
   frame.translation = vec3("/translation");
   if (r.has("/origin")) frame.origin = vec3("/origin");
-  if (const std::string why = frame.validate(); !why.empty()) throw Error(path + ": " + why);
+  if (const std::string why = frame.Validate(); !why.empty()) throw Error(path + ": " + why);
   return frame;
 }
 
@@ -85,7 +85,7 @@ void CheckSameFrame(const FractalFrame& map_frame, const std::string& map_path, 
 }
 
 void RunSdfCommand(const SdfCommandOptions& options) {
-  if (const std::string why = options.validate(); !why.empty()) throw Error("sdf: " + why);
+  if (const std::string why = options.Validate(); !why.empty()) throw Error("sdf: " + why);
   MeshReadReport report;
   const TriangleMesh user_mesh = ReadMesh(options.input, &report);
   FractalFrame frame = NormalizationFor(user_mesh, options.padding, options.fractal_radius);

@@ -23,7 +23,7 @@ struct SdfCommandOptions {
   SdfOptions sdf;             // sign policy (sdf.name is set to the input path)
 
   // Empty when valid, else what is wrong.
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 // Reads and validates the mesh, normalizes it (NormalizationFor), builds the grid with

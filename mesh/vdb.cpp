@@ -50,7 +50,7 @@ void WriteGridAtomically(const std::string& path, const openvdb::FloatGrid::Ptr&
 }  // namespace
 
 void WriteVdb(const std::string& path, const ScalarGrid& grid, const std::string& name) {
-  if (const std::string why = grid.frame.validate(); !why.empty())
+  if (const std::string why = grid.frame.Validate(); !why.empty())
     throw Error(path + ": cannot write VDB: " + why);
   if (std::int64_t(grid.values.size()) != grid.frame.cell_count())
     throw Error(path + ": cannot write VDB: value count does not match the grid");
@@ -108,7 +108,7 @@ void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
                                        coordinates));
 }
 
-std::string VdbVolumeOptions::validate() const {
+std::string VdbVolumeOptions::Validate() const {
   if (!(voxel_size > 0) || !std::isfinite(voxel_size)) return "the voxel size must be finite and > 0";
   if (!(half_width >= 1) || !(half_width <= 1000)) return "the band half-width must be in [1, 1000] voxels";
   return {};
@@ -116,7 +116,7 @@ std::string VdbVolumeOptions::validate() const {
 
 void WriteVdbVolumes(const std::string& path, const TriangleMesh& mesh, const VdbVolumeOptions& o,
                      const VdbRawField* raw) {
-  if (auto why = o.validate(); !why.empty()) throw Error(path + ": cannot write VDB: " + why);
+  if (auto why = o.Validate(); !why.empty()) throw Error(path + ": cannot write VDB: " + why);
   if (!o.surface && !o.density && !raw) throw Error(path + ": cannot write VDB: no grid asked for");
   InitializeOpenVdb();
   openvdb::GridPtrVec grids;

@@ -44,7 +44,7 @@ struct VdbVolumeOptions {
   bool surface = true;
   bool density = true;
   std::string coordinates;  // metadata quijibo_coordinates
-  std::string validate() const;
+  std::string Validate() const;
 };
 struct VdbRawField {
   Vec3 origin{0.0, 0.0, 0.0};

@@ -165,9 +165,59 @@ std::vector<int> ClusterTriangles(const std::vector<Vec3>& centroids,
   return label;
 }
 
+// The patch of each triangle: its own when the mesh has at most max_elements triangles, else
+// clusters of neighbours grown until there are at most max_elements; `count` gets their number.
+std::vector<int> PatchLabels(const std::vector<std::array<int, 3>>& triangles, const std::vector<Vec3>& centroids,
+                             const std::vector<double>& areas, double total_area, const BemOptions& options,
+                             int* count) {
+  const int nt = int(triangles.size());
+  std::vector<int> label(nt);
+  *count = nt;
+  if (nt <= options.max_elements) {
+    std::iota(label.begin(), label.end(), 0);
+    return label;
+  }
+  std::vector<int> start, adj;
+  EdgeAdjacency(triangles, start, adj);
+  double cell = std::sqrt(total_area / options.max_elements);
+  for (int iter = 0; iter < 60; ++iter) {
+    label = ClusterTriangles(centroids, areas, start, adj, cell, count);
+    if (*count <= options.max_elements) break;
+    cell *= std::max(1.02, std::sqrt(double(*count) / options.max_elements));
+  }
+  if (*count > options.max_elements)
+    throw Error("BEM: could not group the mesh into at most " + std::to_string(options.max_elements) +
+                " patches (it has " + std::to_string(*count) + " disconnected pieces)");
+  return label;
+}
+
+// A sigma = 1 by restarted GMRES (diagonal preconditioner), or LU when chosen or when GMRES does
+// not converge; `iterations` and `used_lu` say how.
+Eigen::VectorXd SolveCollocation(const Eigen::MatrixXd& A, const BemOptions& options, int* iterations, bool* used_lu) {
+  const int ne = int(A.rows());
+  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(ne);
+  Eigen::VectorXd sigma;
+  *iterations = 0;
+  *used_lu = options.solver == BemOptions::Solver::kLU;
+  if (!*used_lu) {
+    Eigen::GMRES<Eigen::MatrixXd, Eigen::DiagonalPreconditioner<double>> gmres;
+    gmres.setTolerance(options.solver_tolerance);
+    gmres.setMaxIterations(std::max(200, ne / 4));
+    gmres.set_restart(50);
+    gmres.compute(A);
+    sigma = gmres.solve(ones);
+    *iterations = int(gmres.iterations());
+    *used_lu = gmres.info() != Eigen::Success || !sigma.allFinite() ||
+               (A * sigma - ones).norm() > 100.0 * options.solver_tolerance * ones.norm();
+  }
+  if (*used_lu) sigma = Eigen::PartialPivLU<Eigen::MatrixXd>(A).solve(ones);
+  if (!sigma.allFinite()) throw Error("BEM: the collocation system is singular");
+  return sigma;
+}
+
 }  // namespace
 
-std::string BemOptions::validate() const {
+std::string BemOptions::Validate() const {
   if (max_elements < 4)
     return "bem.max_elements must be at least 4, found " + std::to_string(max_elements);
   if (max_elements > 30000)
@@ -258,10 +308,54 @@ double ExteriorPotential::total_charge() const {
   return q;
 }
 
+void ExteriorPotential::SetPatches(const std::vector<Triangle>& tris, const std::vector<int>& label, int count) {
+  // Sort triangles by patch (stable: deterministic), then the patch moments.
+  const int nt = int(tris.size());
+  std::vector<int> order(nt);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return label[a] < label[b]; });
+  triangles_.resize(nt);
+  for (int i = 0; i < nt; ++i) triangles_[i] = tris[order[i]];
+  patches_.assign(count, {});
+  for (int i = 0; i < nt;) {
+    int j = i;
+    while (j < nt && label[order[j]] == label[order[i]]) ++j;
+    auto& P = patches_[label[order[i]]];
+    P.first = i;
+    P.count = j - i;
+    Vec3 c{0, 0, 0};
+    for (int t = i; t < j; ++t) {
+      P.area += triangles_[t].area;
+      c = Add(c, Scale(triangles_[t].centroid, triangles_[t].area));
+    }
+    P.centroid = P.area > 0.0 ? Scale(c, 1.0 / P.area) : triangles_[i].centroid;
+    double best = HUGE_VAL;
+    for (int t = i; t < j; ++t) {
+      const auto& T = triangles_[t];
+      // Exact second moment of a triangle about the patch centroid:
+      // integral of y y^T = area/12 * (sum_k v_k v_k^T + s s^T), v_k the corners, s their sum.
+      Vec3 v[3], s{0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        v[k] = Sub(T.p[k], P.centroid);
+        s = Add(s, v[k]);
+        P.radius = std::max(P.radius, Norm(v[k]));
+      }
+      auto m = [&](int a, int b) {
+        return T.area / 12.0 * (v[0][a] * v[0][b] + v[1][a] * v[1][b] + v[2][a] * v[2][b] + s[a] * s[b]);
+      };
+      P.moment[0] += m(0, 0), P.moment[1] += m(1, 1), P.moment[2] += m(2, 2);
+      P.moment[3] += m(0, 1), P.moment[4] += m(0, 2), P.moment[5] += m(1, 2);
+      const double dc = Distance(T.centroid, P.centroid);
+      if (dc < best) best = dc, P.collocation = T.centroid;
+    }
+    i = j;
+  }
+}
+
 ExteriorPotential SolveExteriorPotential(const std::vector<Vec3>& vertices,
                                          const std::vector<std::array<int, 3>>& triangles,
                                          const BemOptions& options, BemSummary* summary) {
-  if (const std::string why = options.validate(); !why.empty()) throw Error(why);
+  if (const std::string why = options.Validate(); !why.empty()) throw Error(why);
   if (triangles.empty()) throw Error("BEM: the mesh has no triangles");
   const auto t_start = std::chrono::steady_clock::now();
 
@@ -291,67 +385,9 @@ ExteriorPotential SolveExteriorPotential(const std::vector<Vec3>& vertices,
   if (!(total_area > 0.0) || !std::isfinite(total_area))
     throw Error("BEM: the mesh has no area (or non-finite coordinates)");
 
-  // Patches: every triangle its own when the mesh is small enough, else clustered.
-  std::vector<int> label(nt);
-  int count = nt;
-  if (nt <= options.max_elements) {
-    std::iota(label.begin(), label.end(), 0);
-  } else {
-    std::vector<int> start, adj;
-    EdgeAdjacency(triangles, start, adj);
-    double cell = std::sqrt(total_area / options.max_elements);
-    for (int iter = 0; iter < 60; ++iter) {
-      label = ClusterTriangles(centroids, areas, start, adj, cell, &count);
-      if (count <= options.max_elements) break;
-      cell *= std::max(1.02, std::sqrt(double(count) / options.max_elements));
-    }
-    if (count > options.max_elements)
-      throw Error("BEM: could not group the mesh into at most " +
-                  std::to_string(options.max_elements) + " patches (it has " +
-                  std::to_string(count) + " disconnected pieces)");
-  }
-
-  // Sort triangles by patch (stable: deterministic), then the patch moments.
-  std::vector<int> order(nt);
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return label[a] < label[b]; });
-  pot.triangles_.resize(nt);
-  for (int i = 0; i < nt; ++i) pot.triangles_[i] = tris[order[i]];
-  pot.patches_.assign(count, {});
-  for (int i = 0; i < nt;) {
-    int j = i;
-    while (j < nt && label[order[j]] == label[order[i]]) ++j;
-    auto& P = pot.patches_[label[order[i]]];
-    P.first = i;
-    P.count = j - i;
-    Vec3 c{0, 0, 0};
-    for (int t = i; t < j; ++t) {
-      P.area += pot.triangles_[t].area;
-      c = Add(c, Scale(pot.triangles_[t].centroid, pot.triangles_[t].area));
-    }
-    P.centroid = P.area > 0.0 ? Scale(c, 1.0 / P.area) : pot.triangles_[i].centroid;
-    double best = HUGE_VAL;
-    for (int t = i; t < j; ++t) {
-      const auto& T = pot.triangles_[t];
-      // Exact second moment of a triangle about the patch centroid:
-      // integral of y y^T = area/12 * (sum_k v_k v_k^T + s s^T), v_k the corners, s their sum.
-      Vec3 v[3], s{0, 0, 0};
-      for (int k = 0; k < 3; ++k) {
-        v[k] = Sub(T.p[k], P.centroid);
-        s = Add(s, v[k]);
-        P.radius = std::max(P.radius, Norm(v[k]));
-      }
-      auto m = [&](int a, int b) {
-        return T.area / 12.0 * (v[0][a] * v[0][b] + v[1][a] * v[1][b] + v[2][a] * v[2][b] +
-                                s[a] * s[b]);
-      };
-      P.moment[0] += m(0, 0), P.moment[1] += m(1, 1), P.moment[2] += m(2, 2);
-      P.moment[3] += m(0, 1), P.moment[4] += m(0, 2), P.moment[5] += m(1, 2);
-      const double dc = Distance(T.centroid, P.centroid);
-      if (dc < best) best = dc, P.collocation = T.centroid;
-    }
-    i = j;
-  }
+  int count = 0;
+  const std::vector<int> label = PatchLabels(triangles, centroids, areas, total_area, options, &count);
+  pot.SetPatches(tris, label, count);
 
   // Collocation matrix, one column per patch (contiguous writes).
   const int ne = count;
@@ -362,23 +398,10 @@ ExteriorPotential SolveExteriorPotential(const std::vector<Vec3>& vertices,
   const double assembly_seconds = Seconds(t_start);
 
   const auto t_solve = std::chrono::steady_clock::now();
-  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(ne);
-  Eigen::VectorXd sigma;
   int iterations = 0;
-  bool used_lu = options.solver == BemOptions::Solver::kLU;
-  if (!used_lu) {
-    Eigen::GMRES<Eigen::MatrixXd, Eigen::DiagonalPreconditioner<double>> gmres;
-    gmres.setTolerance(options.solver_tolerance);
-    gmres.setMaxIterations(std::max(200, ne / 4));
-    gmres.set_restart(50);
-    gmres.compute(A);
-    sigma = gmres.solve(ones);
-    iterations = int(gmres.iterations());
-    used_lu = gmres.info() != Eigen::Success || !sigma.allFinite() ||
-              (A * sigma - ones).norm() > 100.0 * options.solver_tolerance * ones.norm();
-  }
-  if (used_lu) sigma = Eigen::PartialPivLU<Eigen::MatrixXd>(A).solve(ones);
-  if (!sigma.allFinite()) throw Error("BEM: the collocation system is singular");
+  bool used_lu = false;
+  const Eigen::VectorXd sigma = SolveCollocation(A, options, &iterations, &used_lu);
+  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(ne);
   const double residual = (A * sigma - ones).norm() / ones.norm();
   pot.sigma_.assign(sigma.data(), sigma.data() + ne);
   const double solve_seconds = Seconds(t_solve);

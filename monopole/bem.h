@@ -49,7 +49,7 @@ struct BemOptions {
   int surface_checks = 1000;
 
   // Empty string when valid, else what is wrong.
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 struct BemSummary {
@@ -100,6 +100,8 @@ class ExteriorPotential {
   };
   // integral over patch j of 1 / |x - y| dA_y (no 1/4pi, unit density).
   double PatchIntegral(int j, const Vec3& x) const;
+  // triangles_ and patches_ from the mesh's triangles and their patch labels (0 .. count - 1).
+  void SetPatches(const std::vector<Triangle>& triangles, const std::vector<int>& label, int count);
 
   BemOptions options_;
   std::vector<Triangle> triangles_;

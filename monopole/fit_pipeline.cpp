@@ -7,9 +7,9 @@
 
 namespace quijibo::monopole {
 
-std::string MonopoleOptions::validate() const {
+std::string MonopoleOptions::Validate() const {
   for (const std::string& why :
-       {bem.validate(), shell.validate(), sampling.validate(), fit.validate()})
+       {bem.Validate(), shell.Validate(), sampling.Validate(), fit.Validate()})
     if (!why.empty()) return why;
   return {};
 }
@@ -27,7 +27,7 @@ MonopoleResult FitMonopoles(const std::vector<Vec3>& vertices,
                             const std::vector<std::array<int, 3>>& triangles,
                             const ScalarGrid& sdf, const MonopoleOptions& options,
                             const MonopoleProgressFn& progress) {
-  if (const std::string why = options.validate(); !why.empty()) throw Error(why);
+  if (const std::string why = options.Validate(); !why.empty()) throw Error(why);
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   auto since = [](Clock::time_point t) {

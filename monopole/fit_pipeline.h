@@ -38,7 +38,7 @@ struct MonopoleOptions {
   MonopoleTarget target = MonopoleTarget::kPotential;
 
   // Empty string when valid, else what is wrong (the first problem found).
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 struct MonopoleTimings {

@@ -9,7 +9,7 @@
 
 namespace quijibo::monopole {
 
-std::string InitialGuessOptions::validate() const {
+std::string InitialGuessOptions::Validate() const {
   if (!(amplitude > 0) || !std::isfinite(amplitude)) return "amplitude must be a positive number";
   if (auto why = CheckRange("scan_resolution", SettingType::kInteger, scan_resolution, kScanResolutionRange);
       !why.empty())
@@ -72,7 +72,7 @@ LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, d
 
 RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFrame& frame, const ScalarGrid& sdf,
                        const InitialGuessOptions& o, LnCScan* scan) {
-  if (auto why = o.validate(); !why.empty()) throw Error("initial guess: " + why);
+  if (auto why = o.Validate(); !why.empty()) throw Error("initial guess: " + why);
   if (monopoles.empty()) throw Error("initial guess: no monopoles");
   RationalMap m;
   m.frame = frame;

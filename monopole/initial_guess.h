@@ -30,7 +30,7 @@ struct InitialGuessOptions {
   int scan_resolution = 25;        // grid of the ln C scan (reference: 25)
   static constexpr ValueRange kScanResolutionRange{4, 512};
   double alpha = 10.0;
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 struct LnCScan {

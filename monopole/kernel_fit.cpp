@@ -14,7 +14,7 @@
 
 namespace quijibo::monopole {
 
-std::string KernelFitOptions::validate() const {
+std::string KernelFitOptions::Validate() const {
   if (roots < 8 || roots > 4000) return "roots must be in [8, 4000]";
   if (max_roots < 8 || max_roots > 4000) return "max roots must be in [8, 4000]";
   if (!(spacing >= 1 && spacing <= 100)) return "root spacing must be in [1, 100] pair sizes";
@@ -168,42 +168,35 @@ std::pair<std::vector<int>, double> SpacePairs(const std::vector<RootPair>& pair
   return {chosen, small};
 }
 
-}  // namespace
-
-RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<std::array<int, 3>>& triangles,
-                         const ScalarGrid& sdf, const FractalFrame& frame, const KernelFitOptions& o,
-                         KernelFitSummary* summary) {
-  if (auto why = o.validate(); !why.empty()) throw Error("log-kernel fit: " + why);
-  const auto t0 = std::chrono::steady_clock::now();
-  const double h = sdf.frame.spacing;
-  const double delta = o.band_cells * h, s = o.amplitude;
-
-  // Root positions: pairs along the normals of surface points, spaced in proportion to their
-  // offset (PlacePairs).
+// The root positions and the surface points that have them.
+struct FitRoots {
   std::vector<Vec4> roots;
-  std::vector<Vec3> points;  // the surface points that have roots
-  std::vector<RootPair> pairs = CandidatePairs(vertices, triangles, sdf, o);
-  const auto [chosen, spacing] = SpacePairs(pairs, o, h);
-  for (int k : chosen) {
-    points.push_back(pairs[k].p);
-    roots.push_back(pairs[k].inside), roots.push_back(pairs[k].outside);
+  std::vector<Vec3> points;
+  void Add(const RootPair& pair) {
+    points.push_back(pair.p);
+    roots.push_back(pair.inside), roots.push_back(pair.outside);
   }
-  auto add_pair = [&](const Vec3& p) {
-    RootPair rp;
-    if (!MakePair(sdf, p, o.offset_cells * h, rp)) return;
-    points.push_back(p);
-    roots.push_back(rp.inside), roots.push_back(rp.outside);
-  };
-  const int base_pairs = int(chosen.size());
-  if (roots.empty()) throw Error("log-kernel fit: no surface normals (is the signed distance field flat?)");
+};
 
-  // Rows: the band at full resolution, a coarse lattice beyond it, and two far spheres.
-  struct Row {
-    Vec3 x;
-    double phi, weight;
-    bool two_sided;
-  };
-  std::vector<Row> rows;
+// A row of the least-squares fit: L at x should follow the clamped signed distance phi (two-sided
+// rows, the inner band) or only lie beyond the band's amplitude on phi's side (one-sided rows).
+struct FitRow {
+  Vec3 x;
+  double phi, weight;
+  bool two_sided;
+};
+
+struct FitRows {
+  std::vector<FitRow> rows;  // the band's, then the coarse lattice's, then the far spheres'
+  int band = 0, far = 0;     // how many band and far rows
+};
+
+// The rows: the band (|phi| <= 2 delta) at full resolution, a coarse lattice beyond it, and two
+// far spheres; inside and outside carry equal total weight, as the energy's normalization gives them.
+FitRows MakeFitRows(const ScalarGrid& sdf, const KernelFitOptions& o) {
+  const double h = sdf.frame.spacing, delta = o.band_cells * h;
+  FitRows out;
+  std::vector<FitRow>& rows = out.rows;
   const auto& d = sdf.frame.dims;
   std::vector<std::int64_t> band;
   for (std::int64_t c = 0; c < sdf.frame.cell_count(); ++c)
@@ -214,7 +207,7 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
     const double phi = sdf.values[c];
     rows.push_back({sdf.frame.cell_center(c), phi, band_stride / std::max(h, std::abs(phi)), std::abs(phi) < delta});
   }
-  const int band_rows = int(rows.size());
+  out.band = int(rows.size());
   const int st = o.coarse_stride;
   const double coarse_volume = double(st) * st * st;
   double outside_coarse_weight = 0;
@@ -233,114 +226,138 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
                     sdf.frame.min_corner[2] + ext[2] / 2};
   const double half_diagonal = 0.5 * std::sqrt(ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]);
   const double far_weight = outside_coarse ? outside_coarse_weight / outside_coarse : 1.0 / h;
-  int far_rows = 0;
   for (double radius : {1.1 * half_diagonal, 3.0 * half_diagonal})
-    for (const Vec3& x : SpherePoints(center, radius, 256)) rows.push_back({x, radius, far_weight, false}), ++far_rows;
-  // Inside and outside carry equal total weight, as the energy's normalization gives them.
+    for (const Vec3& x : SpherePoints(center, radius, 256)) rows.push_back({x, radius, far_weight, false}), ++out.far;
   double w_in = 0, w_out = 0;
-  for (const Row& r : rows) (r.phi < 0 ? w_in : w_out) += r.weight;
+  for (const FitRow& r : rows) (r.phi < 0 ? w_in : w_out) += r.weight;
   if (!(w_in > 0)) throw Error("log-kernel fit: the target has no inside cells");
-  for (Row& r : rows)
+  for (FitRow& r : rows)
     if (r.phi < 0) r.weight *= w_out / w_in;
-  const int M = int(rows.size());
+  return out;
+}
 
-  Eigen::VectorXd e, L, g(M), w(M), fixed(M);
-  int iterations = 0, rounds = 0;
-  for (int round = 0;; ++round) {
-    // The design matrix: a column of ones (ln C) and the log-distances to every root.
-    const int R = int(roots.size()), cols = R + 1;
-    Eigen::MatrixXd A(M, cols);
-  #pragma omp parallel for schedule(static)
-    for (int r = 0; r < M; ++r) {
-      A(r, 0) = 1.0;
-      for (int i = 0; i < R; ++i) A(r, i + 1) = LogDistance(rows[r].x, roots[i], 0.0);
-      g[r] = s * std::clamp(rows[r].phi / delta, -1.0, 1.0);
-      fixed[r] = o.origin_root ? LogDistance(rows[r].x, Vec4{0, 0, 0, 0}) : 0.0;
-      w[r] = rows[r].weight;
-    }
-    for (int r = 0; r < M; ++r)
-      if (!A.row(r).allFinite() || !std::isfinite(fixed[r])) w[r] = 0, A.row(r).setZero(), fixed[r] = 0;  // on a root
+// One round's fit: e (ln C, then one exponent per root), L at the rows, the rows' goals g and
+// weights w (0 for a row on a root).
+struct FitSolution {
+  Eigen::VectorXd e, L, g, w;
+  int iterations = 0;  // active-set iterations
+};
 
-    std::vector<char> active(M, 1);
-    Eigen::MatrixXd N = Eigen::MatrixXd::Zero(cols, cols);
-    auto add_rows = [&](const std::vector<int>& which, double sign) {
-      if (which.empty()) return;
-      Eigen::MatrixXd B(Eigen::Index(which.size()), cols);
-      for (std::size_t k = 0; k < which.size(); ++k) B.row(Eigen::Index(k)) = std::sqrt(w[which[k]]) * A.row(which[k]);
-      N.selfadjointView<Eigen::Lower>().rankUpdate(B.transpose(), sign);
-    };
-    std::vector<int> all(M);
-    for (int r = 0; r < M; ++r) all[r] = r;
-    add_rows(all, 1.0);
-    e = Eigen::VectorXd::Zero(cols);
-    for (int it = 0; it < o.active_set_iterations; ++it) {
-      ++iterations;
-      Eigen::MatrixXd Nr = N.selfadjointView<Eigen::Lower>();
-      const double mean_diag = Nr.diagonal().tail(R).mean();
-      for (int i = 1; i < cols; ++i) Nr(i, i) += o.ridge * mean_diag;
-      Eigen::VectorXd v(M);
-      for (int r = 0; r < M; ++r) v[r] = active[r] ? w[r] * (g[r] - fixed[r]) : 0.0;
-      const Eigen::VectorXd rhs = A.transpose() * v;
-      e = Nr.ldlt().solve(rhs);
-      if (!e.allFinite()) throw Error("log-kernel fit: the least-squares system is singular");
-      L = A * e + fixed;
-      // One-sided rows leave while satisfied and come back when violated.
-      std::vector<int> leave, enter;
-      for (int r = 0; r < M; ++r) {
-        if (rows[r].two_sided) continue;
-        const bool satisfied = rows[r].phi > 0 ? L[r] >= s : L[r] <= -s;
-        if (satisfied && active[r]) leave.push_back(r), active[r] = 0;
-        else if (!satisfied && !active[r]) enter.push_back(r), active[r] = 1;
-      }
-      if (leave.empty() && enter.empty()) break;
-      add_rows(leave, -1.0);
-      add_rows(enter, 1.0);
-    }
-
-
-    // More roots where the fit is poor: cells on the wrong side, heaviest first, projected
-    // onto the surface, each at least a pair's width (twice the offset) from every point that already has roots.
-    if (round == o.refine_rounds) break;
-    std::vector<int> wrong;
-    double wrong_weight[2] = {0, 0}, side_weight[2] = {0, 0};  // inside, outside
-    for (int r = 0; r < M - far_rows; ++r) {
-      const int side = rows[r].phi < 0 ? 0 : 1;
-      side_weight[side] += w[r];
-      if (w[r] > 0 && (L[r] < 0) != (rows[r].phi < 0)) wrong.push_back(r), wrong_weight[side] += w[r];
-    }
-    // Per side, so that a thin part (few inside cells) is not outvoted by the outside.
-    if (wrong_weight[0] <= o.refine_above * side_weight[0] && wrong_weight[1] <= o.refine_above * side_weight[1]) break;
-    std::stable_sort(wrong.begin(), wrong.end(), [&](int x, int y) { return w[x] > w[y]; });
-    const std::size_t before = points.size();
-    const double min_gap2 = std::pow(2 * o.offset_cells * h, 2);  // the pairs' own spacing
-    for (int r : wrong) {
-      if (int(points.size() - before) >= base_pairs / 2) break;
-      const Vec3& x = rows[r].x;
-      Vec3 n = Gradient(sdf, x);
-      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      if (!(len > 1e-12)) continue;
-      const Vec3 p{x[0] - rows[r].phi * n[0] / len, x[1] - rows[r].phi * n[1] / len, x[2] - rows[r].phi * n[2] / len};
-      bool near = false;
-      for (const Vec3& q : points)
-        if ((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]) < min_gap2) {
-          near = true;
-          break;
-        }
-      if (!near) add_pair(p);
-    }
-    if (points.size() == before) break;
-    ++rounds;
+// Weighted least squares of L = ln C + sum e_i log|x - root_i| (+ log|x| with the origin root)
+// against the goals, by an active set: one-sided rows leave while satisfied and come back when
+// violated; the normal matrix is updated by rank updates as rows move.
+FitSolution SolveExponents(const FitRows& fit_rows, const std::vector<Vec4>& roots, const KernelFitOptions& o,
+                           double delta) {
+  const std::vector<FitRow>& rows = fit_rows.rows;
+  const int M = int(rows.size()), R = int(roots.size()), cols = R + 1;
+  const double s = o.amplitude;
+  FitSolution out;
+  Eigen::VectorXd& g = out.g;
+  Eigen::VectorXd& w = out.w;
+  Eigen::VectorXd fixed(M);
+  g.resize(M), w.resize(M);
+  // The design matrix: a column of ones (ln C) and the log-distances to every root.
+  Eigen::MatrixXd A(M, cols);
+#pragma omp parallel for schedule(static)
+  for (int r = 0; r < M; ++r) {
+    A(r, 0) = 1.0;
+    for (int i = 0; i < R; ++i) A(r, i + 1) = LogDistance(rows[r].x, roots[i], 0.0);
+    g[r] = s * std::clamp(rows[r].phi / delta, -1.0, 1.0);
+    fixed[r] = o.origin_root ? LogDistance(rows[r].x, Vec4{0, 0, 0, 0}) : 0.0;
+    w[r] = rows[r].weight;
   }
-  const int R = int(roots.size());
+  for (int r = 0; r < M; ++r)
+    if (!A.row(r).allFinite() || !std::isfinite(fixed[r])) w[r] = 0, A.row(r).setZero(), fixed[r] = 0;  // on a root
 
+  std::vector<char> active(M, 1);
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(cols, cols);
+  auto add_rows = [&](const std::vector<int>& which, double sign) {
+    if (which.empty()) return;
+    Eigen::MatrixXd B(Eigen::Index(which.size()), cols);
+    for (std::size_t k = 0; k < which.size(); ++k) B.row(Eigen::Index(k)) = std::sqrt(w[which[k]]) * A.row(which[k]);
+    N.selfadjointView<Eigen::Lower>().rankUpdate(B.transpose(), sign);
+  };
+  std::vector<int> all(M);
+  for (int r = 0; r < M; ++r) all[r] = r;
+  add_rows(all, 1.0);
+  out.e = Eigen::VectorXd::Zero(cols);
+  for (int it = 0; it < o.active_set_iterations; ++it) {
+    ++out.iterations;
+    Eigen::MatrixXd Nr = N.selfadjointView<Eigen::Lower>();
+    const double mean_diag = Nr.diagonal().tail(R).mean();
+    for (int i = 1; i < cols; ++i) Nr(i, i) += o.ridge * mean_diag;
+    Eigen::VectorXd v(M);
+    for (int r = 0; r < M; ++r) v[r] = active[r] ? w[r] * (g[r] - fixed[r]) : 0.0;
+    const Eigen::VectorXd rhs = A.transpose() * v;
+    out.e = Nr.ldlt().solve(rhs);
+    if (!out.e.allFinite()) throw Error("log-kernel fit: the least-squares system is singular");
+    out.L = A * out.e + fixed;
+    std::vector<int> leave, enter;
+    for (int r = 0; r < M; ++r) {
+      if (rows[r].two_sided) continue;
+      const bool satisfied = rows[r].phi > 0 ? out.L[r] >= s : out.L[r] <= -s;
+      if (satisfied && active[r]) leave.push_back(r), active[r] = 0;
+      else if (!satisfied && !active[r]) enter.push_back(r), active[r] = 1;
+    }
+    if (leave.empty() && enter.empty()) break;
+    add_rows(leave, -1.0);
+    add_rows(enter, 1.0);
+  }
+  return out;
+}
+
+// More roots where the fit is poor: rows on the wrong side, heaviest first, projected onto the
+// surface, each at least a pair's width (twice the offset) from every point that already has
+// roots, at most base_pairs / 2 a round. Returns whether it added any.
+bool RefineRoots(const ScalarGrid& sdf, const FitRows& fit_rows, const FitSolution& fit, int base_pairs,
+                 const KernelFitOptions& o, FitRoots& roots) {
+  const std::vector<FitRow>& rows = fit_rows.rows;
+  const Eigen::VectorXd &w = fit.w, &L = fit.L;
+  const int M = int(rows.size());
+  const double h = sdf.frame.spacing;
+  std::vector<int> wrong;
+  double wrong_weight[2] = {0, 0}, side_weight[2] = {0, 0};  // inside, outside
+  for (int r = 0; r < M - fit_rows.far; ++r) {
+    const int side = rows[r].phi < 0 ? 0 : 1;
+    side_weight[side] += w[r];
+    if (w[r] > 0 && (L[r] < 0) != (rows[r].phi < 0)) wrong.push_back(r), wrong_weight[side] += w[r];
+  }
+  // Per side, so that a thin part (few inside cells) is not outvoted by the outside.
+  if (wrong_weight[0] <= o.refine_above * side_weight[0] && wrong_weight[1] <= o.refine_above * side_weight[1])
+    return false;
+  std::stable_sort(wrong.begin(), wrong.end(), [&](int x, int y) { return w[x] > w[y]; });
+  const std::size_t before = roots.points.size();
+  const double min_gap2 = std::pow(2 * o.offset_cells * h, 2);  // the pairs' own spacing
+  for (int r : wrong) {
+    if (int(roots.points.size() - before) >= base_pairs / 2) break;
+    const Vec3& x = rows[r].x;
+    Vec3 n = Gradient(sdf, x);
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 1e-12)) continue;
+    const Vec3 p{x[0] - rows[r].phi * n[0] / len, x[1] - rows[r].phi * n[1] / len, x[2] - rows[r].phi * n[2] / len};
+    bool near = false;
+    for (const Vec3& q : roots.points)
+      if ((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]) < min_gap2) {
+        near = true;
+        break;
+      }
+    RootPair rp;
+    if (!near && MakePair(sdf, p, o.offset_cells * h, rp)) roots.Add(rp);
+  }
+  return roots.points.size() != before;
+}
+
+// The map of the fitted exponents: positive ones top roots, negative ones bottom roots; counts
+// and the exponents' sum into `out`.
+RationalMap FittedMap(const std::vector<Vec4>& roots, const Eigen::VectorXd& e, const FractalFrame& frame,
+                      bool origin_root, KernelFitSummary& out) {
   RationalMap m;
   m.frame = frame;
-  if (o.origin_root) {
+  if (origin_root) {
     m.top_roots.push_back({0, 0, 0, 0});
     m.top_exponents.push_back(1.0);
   }
-  KernelFitSummary out;
-  for (int i = 0; i < R; ++i) {
+  for (int i = 0; i < int(roots.size()); ++i) {
     const double ei = e[i + 1];
     out.exponent_sum += ei;
     if (ei > 0) m.top_roots.push_back(roots[i]), m.top_exponents.push_back(ei), ++out.top;
@@ -348,18 +365,55 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
   }
   m.ln_C = e[0];
   m.tau = m.beta = 1.0;
+  return m;
+}
+
+// The fit's residual on the band and its sign agreement, into `out`.
+void SummarizeFit(const FitRows& fit_rows, const FitSolution& fit, KernelFitSummary& out) {
+  const Eigen::VectorXd &w = fit.w, &L = fit.L, &g = fit.g;
+  const int M = int(fit_rows.rows.size());
   double band_sq = 0, band_w = 0, agree = 0, total = 0;
   for (int r = 0; r < M; ++r) {
     if (!(w[r] > 0)) continue;
-    if (r < band_rows) band_sq += w[r] * (L[r] - g[r]) * (L[r] - g[r]), band_w += w[r];
+    if (r < fit_rows.band) band_sq += w[r] * (L[r] - g[r]) * (L[r] - g[r]), band_w += w[r];
     total += w[r];
-    if ((L[r] < 0) == (rows[r].phi < 0)) agree += w[r];
+    if ((L[r] < 0) == (fit_rows.rows[r].phi < 0)) agree += w[r];
   }
-  out.rows = M, out.band_rows = band_rows, out.far_rows = far_rows, out.iterations = iterations;
-  out.refine_rounds = rounds;
-  out.spacing = spacing;
+  out.rows = M, out.band_rows = fit_rows.band, out.far_rows = fit_rows.far;
   out.rms_band = band_w > 0 ? std::sqrt(band_sq / band_w) : 0;
   out.sign_agreement = total > 0 ? agree / total : 0;
+}
+
+}  // namespace
+
+RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<std::array<int, 3>>& triangles,
+                         const ScalarGrid& sdf, const FractalFrame& frame, const KernelFitOptions& o,
+                         KernelFitSummary* summary) {
+  if (auto why = o.Validate(); !why.empty()) throw Error("log-kernel fit: " + why);
+  const auto t0 = std::chrono::steady_clock::now();
+  const double h = sdf.frame.spacing;
+
+  // Root positions: pairs along the normals of surface points, spaced in proportion to their
+  // offset (PlacePairs).
+  FitRoots roots;
+  const std::vector<RootPair> pairs = CandidatePairs(vertices, triangles, sdf, o);
+  const auto [chosen, spacing] = SpacePairs(pairs, o, h);
+  for (int k : chosen) roots.Add(pairs[k]);
+  const int base_pairs = int(chosen.size());
+  if (roots.roots.empty()) throw Error("log-kernel fit: no surface normals (is the signed distance field flat?)");
+
+  const FitRows rows = MakeFitRows(sdf, o);
+  KernelFitSummary out;
+  FitSolution fit;
+  for (int round = 0;; ++round) {
+    fit = SolveExponents(rows, roots.roots, o, o.band_cells * h);
+    out.iterations += fit.iterations;
+    if (round == o.refine_rounds || !RefineRoots(sdf, rows, fit, base_pairs, o, roots)) break;
+    ++out.refine_rounds;
+  }
+  RationalMap m = FittedMap(roots.roots, fit.e, frame, o.origin_root, out);
+  SummarizeFit(rows, fit, out);
+  out.spacing = spacing;
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (summary) *summary = out;
   return m;

@@ -65,7 +65,7 @@ struct KernelFitOptions {
   // to dust (measured on the hand: n-step IoU 0.02).
   bool origin_root = true;
   std::uint64_t seed = 1;      // blue-noise sampling of the surface
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 struct KernelFitSummary {

@@ -77,7 +77,7 @@ Eigen::VectorXd IncrementalLeastSquares::Solution() const {
   return R_.topLeftCorner(k_, k_).triangularView<Eigen::Upper>().solve(z_.head(k_));
 }
 
-std::string GreedyFitOptions::validate() const {
+std::string GreedyFitOptions::Validate() const {
   if (!(epsilon >= 0.0) || !(epsilon < 1.0))
     return "fit.epsilon (relative residual) must be in [0, 1), found " + std::to_string(epsilon);
   if (batch_size < 1) return "fit.batch_size must be positive, found " + std::to_string(batch_size);
@@ -128,7 +128,7 @@ std::vector<Monopole> GreedyMonopoleFit(const std::vector<Vec3>& points,
                                         const std::vector<Vec3>& candidates,
                                         const GreedyFitOptions& options, GreedyFitSummary* summary,
                                         const GreedyFitCallback& on_step) {
-  if (const std::string why = options.validate(); !why.empty()) throw Error(why);
+  if (const std::string why = options.Validate(); !why.empty()) throw Error(why);
   if (points.empty()) throw Error("monopole fit: no collocation points");
   if (targets.size() != points.size())
     throw Error("monopole fit: " + std::to_string(targets.size()) + " target values for " +

@@ -69,7 +69,7 @@ struct GreedyFitOptions {
   bool normalize_columns = false;
 
   // Empty string when valid, else what is wrong.
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 enum class FitStop {

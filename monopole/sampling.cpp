@@ -15,7 +15,7 @@ using namespace monopole_detail;
 
 double UniformDouble(std::uint64_t bits) { return double(bits >> 11) * 0x1.0p-53; }
 
-std::string SamplingOptions::validate() const {
+std::string SamplingOptions::Validate() const {
   if (count < 1) return "sampling.count must be positive, found " + std::to_string(count);
   if (count > 50000000)
     return "sampling.count must be at most 50000000, found " + std::to_string(count);
@@ -27,7 +27,7 @@ std::string SamplingOptions::validate() const {
 std::vector<Vec3> PoissonDiskSample(const std::vector<Vec3>& vertices,
                                     const std::vector<std::array<int, 3>>& triangles,
                                     const SamplingOptions& options) {
-  if (const std::string why = options.validate(); !why.empty()) throw Error(why);
+  if (const std::string why = options.Validate(); !why.empty()) throw Error(why);
   if (triangles.empty()) throw Error("sampling: the mesh has no triangles");
   const int nt = int(triangles.size());
   std::vector<double> cumulative(nt);

@@ -26,7 +26,7 @@ struct SamplingOptions {
   std::uint64_t seed = 5489;  // std::mt19937_64 seed
 
   // Empty string when valid, else what is wrong.
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 // Blue-noise points on the mesh surface.

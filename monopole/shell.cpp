@@ -6,7 +6,7 @@
 
 namespace quijibo::monopole {
 
-std::string ShellOptions::validate() const {
+std::string ShellOptions::Validate() const {
   if (!std::isfinite(offset_cells) || offset_cells < 0.0)
     return "shell.offset_cells must be a non-negative number, found " +
            std::to_string(offset_cells);
@@ -14,8 +14,8 @@ std::string ShellOptions::validate() const {
 }
 
 OffsetShell ComputeOffsetShell(const ScalarGrid& sdf, const ShellOptions& options) {
-  if (const std::string why = options.validate(); !why.empty()) throw Error(why);
-  if (const std::string why = sdf.frame.validate(); !why.empty()) throw Error("shell: " + why);
+  if (const std::string why = options.Validate(); !why.empty()) throw Error(why);
+  if (const std::string why = sdf.frame.Validate(); !why.empty()) throw Error("shell: " + why);
   if (std::int64_t(sdf.values.size()) != sdf.frame.cell_count())
     throw Error("shell: the grid has " + std::to_string(sdf.values.size()) + " values for " +
                 std::to_string(sdf.frame.cell_count()) + " cells");

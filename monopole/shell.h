@@ -20,7 +20,7 @@ struct ShellOptions {
   double offset_cells = 5.0;  // reference code: 5 (its built-in default 3)
 
   // Empty string when valid, else what is wrong.
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 struct OffsetShell {

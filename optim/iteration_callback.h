@@ -1,6 +1,6 @@
 // Observers of an optimization run (as Ceres' IterationCallback): Optimize hands every record of
 // the run to its own observers (the JSON-lines log, the progress line, checkpoints: optim/
-// observers.h) and then to OptimizeOptions::callbacks. A record is exactly one line of log.jsonl.
+// jsonl_log.h, progress_line.h, checkpoint.h), then OptimizeOptions::callbacks: one log.jsonl line each.
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -5,7 +5,7 @@
 
 namespace quijibo {
 
-std::string EnergyOptions::validate() const {
+std::string EnergyOptions::Validate() const {
   return CheckRange("alpha", SettingType::kNumber, alpha, kAlphaRange);
 }
 

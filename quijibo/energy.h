@@ -29,7 +29,9 @@ namespace quijibo {
 struct EnergyOptions {
   double alpha = 10.0;  // sharpness of the tanh step (reference code: 10)
   static constexpr ValueRange kAlphaRange{0, 1e6, true};
-  std::string validate() const;
+  std::string Validate() const;
+  // Also under this name: optim/, the energy evaluators and the Python module call it so.
+  std::string validate() const { return Validate(); }
 };
 
 // Which variables an evaluation differentiates.

@@ -42,7 +42,7 @@ std::string FrameDifference(const FractalFrame& a, const FractalFrame& b) {
   return d;
 }
 
-std::string FractalFrame::validate() const {
+std::string FractalFrame::Validate() const {
   if (!(fractal_radius > 0.0) || !std::isfinite(fractal_radius))
     return "fractal_radius must be a positive finite number";
   if (!(padding >= 0.0 && padding < 0.5)) return "padding must be in [0, 0.5)";

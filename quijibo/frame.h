@@ -49,7 +49,7 @@ struct FractalFrame {
   bool default_origin() const { return origin == Vec3{0.5, 0.5, 0.5}; }
   // Lengths scale by this factor from the user frame to the fractal frame.
   double user_to_fractal_scale() const { return fractal_radius * scale; }
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 // How frame `b` differs from frame `a`: "" when they are the same (to 1e-9 relative), else the

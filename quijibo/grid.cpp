@@ -55,7 +55,7 @@ GridFrame GridFrame::resampled(int n) const {
   return f;
 }
 
-std::string GridFrame::validate() const {
+std::string GridFrame::Validate() const {
   for (int a = 0; a < 3; ++a) {
     if (dims[a] < 1) return "grid dimensions must be positive, found " + std::to_string(dims[a]);
     if (!std::isfinite(min_corner[a])) return "grid corner must be finite";
@@ -92,7 +92,7 @@ double ScalarGrid::sample(const Vec3& p) const {
 }
 
 void WriteGrid(const std::string& path, const ScalarGrid& grid) {
-  if (const std::string why = grid.frame.validate(); !why.empty())
+  if (const std::string why = grid.frame.Validate(); !why.empty())
     throw Error(path + ": cannot write grid: " + why);
   if (std::int64_t(grid.values.size()) != grid.frame.cell_count())
     throw Error(path + ": cannot write grid: value count does not match its dimensions");
@@ -141,7 +141,7 @@ ScalarGrid ReadGrid(const std::string& path) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(path + ": bad .qgrid header: " + e.what());
   }
-  if (const std::string why = g.frame.validate(); !why.empty()) throw Error(path + ": " + why);
+  if (const std::string why = g.frame.Validate(); !why.empty()) throw Error(path + ": " + why);
   g.values.resize(std::size_t(g.frame.cell_count()));
   if (!in.read(reinterpret_cast<char*>(g.values.data()),
                std::streamsize(g.values.size() * sizeof(double))))

@@ -46,7 +46,9 @@ struct GridFrame {
   // Same box, n cells along the longest axis (used for coarse optimization levels).
   GridFrame resampled(int n) const;
   // Empty string when valid, else what is wrong.
-  std::string validate() const;
+  std::string Validate() const;
+  // Also under this name: optim/, the energy evaluators and the Python module call it so.
+  std::string validate() const { return Validate(); }
   bool operator==(const GridFrame&) const = default;
 };
 

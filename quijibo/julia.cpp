@@ -21,7 +21,7 @@ SampleTransform SampleTransform::AxisAngle(const Vec3& axis, double degrees, con
   return r;
 }
 
-std::string JuliaOptions::validate() const {
+std::string JuliaOptions::Validate() const {
   if (iterations < 1 || iterations > 1000) return "iterations must be in [1, 1000]";
   if (!(escape_radius > 1.0) || !std::isfinite(escape_radius)) return "escape radius must be finite and > 1";
   if (!(capture_radius >= 0.0 && capture_radius <= 1.0)) return "capture radius must be in [0, 1]";
@@ -36,8 +36,8 @@ std::string JuliaOptions::validate() const {
 
 template <class Real>
 JuliaMap<Real>::JuliaMap(const RationalMap& map, const JuliaOptions& options) : options_(options) {
-  if (auto why = map.validate(); !why.empty()) throw Error("map: " + why);
-  if (auto why = options.validate(); !why.empty()) throw Error(why);
+  if (auto why = map.Validate(); !why.empty()) throw Error("map: " + why);
+  if (auto why = options.Validate(); !why.empty()) throw Error(why);
   const Vec4& t = options.root_translation;
   auto place = [&](const Vec4& r) {
     return Quaternion<Real>(Real(options.root_scale * r[0] + t[0]), Real(options.root_scale * r[1] + t[1]),

@@ -71,7 +71,7 @@ struct JuliaOptions {
   Vec4 root_translation{0.0, 0.0, 0.0, 0.0};
   double root_scale = 1.0;
   SampleTransform placement;
-  std::string validate() const;   // empty when valid
+  std::string Validate() const;   // empty when valid
 };
 
 template <class Real>

@@ -50,7 +50,7 @@ double Mask::distance(const Vec3& p) const {
   return 1e300;
 }
 
-std::string Mask::validate() const {
+std::string Mask::Validate() const {
   switch (type) {
     case Type::kSphere:
       if (!(radius > 0) || !std::isfinite(radius)) return "sphere radius must be > 0";
@@ -120,7 +120,7 @@ Mask MaskFromJson(const JsonReader& r, const std::string& p, const std::string& 
   } else {
     r.fail(p + "/type", "expected \"sphere\", \"box\", \"halfspace\" or \"sdf\", found \"" + type + "\"");
   }
-  if (auto why = m.validate(); !why.empty()) r.fail(p, why);
+  if (auto why = m.Validate(); !why.empty()) r.fail(p, why);
   return m;
 }
 
@@ -221,7 +221,7 @@ std::string ParameterField::validate(const std::string& name) const {
   for (const Region& r : regions) {
     if (!std::isfinite(r.value)) return name + ": region values must be finite";
     if (!(r.feather > 0)) return name + ": region feather must be > 0";
-    if (auto why = r.mask.validate(); !why.empty()) return name + ": " + why;
+    if (auto why = r.mask.Validate(); !why.empty()) return name + ": " + why;
   }
   return {};
 }

@@ -38,7 +38,7 @@ struct Mask {
   std::string sdf_path;                   // for JSON output
 
   double distance(const Vec3& p) const;
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 // Loads the grid of an "sdf" mask from its file (path already resolved against base_dir). The

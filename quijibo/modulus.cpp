@@ -78,7 +78,7 @@ ModulusTarget ModulusTargetFromGrid(std::shared_ptr<const ScalarGrid> grid, doub
 
 ModulusTarget ModulusTargetFromUnitGrid(std::shared_ptr<const ScalarGrid> grid) { return FromGrid(std::move(grid), 1.0); }
 
-std::string AuthorsFrame::validate() const {
+std::string AuthorsFrame::Validate() const {
   if (sdf_resolution < 1) return "authors' frame: the SDF resolution must be >= 1";
   if (nodes != 0 && nodes < 2) return "authors' frame: the node count must be >= 2 (or 0: the SDF resolution)";
   if (node_count() < 2) return "authors' frame: the node count (the SDF resolution) must be >= 2";
@@ -87,7 +87,7 @@ std::string AuthorsFrame::validate() const {
 }
 
 ModulusTarget InAuthorsFrame(const ModulusTarget& target, const AuthorsFrame& frame) {
-  if (auto why = frame.validate(); !why.empty()) throw Error(why);
+  if (auto why = frame.Validate(); !why.empty()) throw Error(why);
   if (target.dimension != 3) throw Error("authors' frame: only for 3D targets");
   const double stretch = double(frame.node_count() - 1) / double(frame.sdf_resolution);
   auto g = [stretch](double t) { return -0.5 + (std::clamp(t, -0.5, 0.5) + 0.5) * stretch; };
@@ -103,7 +103,7 @@ ModulusTarget InAuthorsFrame(const ModulusTarget& target, const AuthorsFrame& fr
 }
 
 ShapeModulusOptions AuthorsParameters(const ShapeModulusOptions& theirs, const AuthorsFrame& frame) {
-  if (auto why = frame.validate(); !why.empty()) throw Error(why);
+  if (auto why = frame.Validate(); !why.empty()) throw Error(why);
   const double s = frame.unit_scale;
   auto scaled = [](ParameterField f, double k) {
     f.value = f.value * k + 0.0;  // + 0.0: a zero stays +0 (no "-0" in reports)
@@ -187,7 +187,7 @@ ModulusTarget AnalyticModulusTarget(const std::string& spec) {
 
 // ---- versor polynomial ----
 
-std::string VersorPolynomial::validate() const {
+std::string VersorPolynomial::Validate() const {
   if (roots.empty()) return "the versor polynomial has no root";
   if (roots.size() != powers.size())
     return "roots and powers differ in number (" + std::to_string(roots.size()) + " vs " +
@@ -201,7 +201,7 @@ std::string VersorPolynomial::validate() const {
   return {};
 }
 
-std::string VersorGeneratorOptions::validate() const {
+std::string VersorGeneratorOptions::Validate() const {
   if (roots < 1 || roots > 10000) return "root count must be in [1, 10000]";
   if (!(min_power <= max_power) || !std::isfinite(min_power) || !std::isfinite(max_power))
     return "need min_power <= max_power";
@@ -213,7 +213,7 @@ std::string VersorGeneratorOptions::validate() const {
 }
 
 VersorPolynomial GenerateVersorPolynomial(const VersorGeneratorOptions& o) {
-  if (auto why = o.validate(); !why.empty()) throw Error("versor polynomial: " + why);
+  if (auto why = o.Validate(); !why.empty()) throw Error("versor polynomial: " + why);
   std::mt19937_64 rng(o.seed);
   auto uniform = [&] { return double(rng() >> 11) * 0x1.0p-53; };  // [0, 1)
   VersorPolynomial p;
@@ -274,7 +274,7 @@ VersorPolynomial VersorPolynomialFromJson(const json& j, const std::string& sour
   for (std::size_t i = 0; i < m; ++i) p.powers.push_back(r.number("/powers/" + std::to_string(i)));
   p.power_scalar = r.number_or("/power_scalar", 1.0);
   if (r.has("/generator")) p.generator = r.at("/generator");
-  if (auto why = p.validate(); !why.empty()) r.fail("", why);
+  if (auto why = p.Validate(); !why.empty()) r.fail("", why);
   return p;
 }
 
@@ -288,7 +288,7 @@ VersorPolynomial ReadVersorPolynomial(const std::string& path) {
 
 // ---- the map ----
 
-std::string ShapeModulusOptions::validate() const {
+std::string ShapeModulusOptions::Validate() const {
   if (auto why = alpha.validate("alpha"); !why.empty()) return why;
   if (auto why = beta.validate("beta"); !why.empty()) return why;
   for (double c : origin_offset)
@@ -299,9 +299,9 @@ std::string ShapeModulusOptions::validate() const {
 ShapeModulusMap::ShapeModulusMap(ModulusTarget target, const Versor& versor, const ShapeModulusOptions& options)
     : target_(std::move(target)), kind_(versor.kind), noise_(versor.noise), options_(options) {
   if (!target_.phi) throw Error("shape modulus: the target has no signed distance");
-  if (auto why = options_.validate(); !why.empty()) throw Error("shape modulus: " + why);
+  if (auto why = options_.Validate(); !why.empty()) throw Error("shape modulus: " + why);
   if (kind_ == Versor::Kind::kPolynomial) {
-    if (auto why = versor.polynomial.validate(); !why.empty()) throw Error("shape modulus: " + why);
+    if (auto why = versor.polynomial.Validate(); !why.empty()) throw Error("shape modulus: " + why);
     for (std::size_t i = 0; i < versor.polynomial.roots.size(); ++i) {
       const Vec4& r = versor.polynomial.roots[i];
       roots_.push_back(target_.dimension == 2 ? Quat{r[0], r[1], 0, 0} : Quat{r[0], r[1], r[2], r[3]});

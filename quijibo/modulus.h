@@ -89,7 +89,7 @@ struct AuthorsFrame {
   int nodes = 0;
   double unit_scale = 1.0;  // s, > 0 (a mesh target: its normalization scale)
   int node_count() const { return nodes > 0 ? nodes : sdf_resolution; }
-  std::string validate() const;
+  std::string Validate() const;
 };
 ModulusTarget InAuthorsFrame(const ModulusTarget& target, const AuthorsFrame& frame);
 
@@ -107,7 +107,7 @@ struct VersorPolynomial {
   double power_scalar = 1.0;
   std::string description;
   nlohmann::json generator = nlohmann::json::object();  // how it was made (options, seed)
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 // Roots uniform in the box [box_min, box_max] (k = 0), powers uniform: integers in
@@ -121,7 +121,7 @@ struct VersorGeneratorOptions {
   bool integer_powers = true;
   Vec3 box_min{-0.5, -0.5, -0.5}, box_max{0.5, 0.5, 0.5};
   std::uint64_t seed = 1;
-  std::string validate() const;
+  std::string Validate() const;
 };
 VersorPolynomial GenerateVersorPolynomial(const VersorGeneratorOptions& options);
 
@@ -149,7 +149,7 @@ struct ShapeModulusOptions {
   ParameterField alpha = ParameterField(30.0);
   ParameterField beta = ParameterField(0.0);  // paper's sign: exp(alpha (phi + beta))
   Vec3 origin_offset{0.0, 0.0, 0.0};
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 // The authors' a and b (fields too: every value of a field is converted, masks and feathers kept,

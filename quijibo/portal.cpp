@@ -27,8 +27,8 @@ Vec3 PortalTransform::Apply(const Vec3& x) const {
   return v;
 }
 
-std::string Portal::validate() const {
-  if (auto why = mask.validate(); !why.empty()) return why;
+std::string Portal::Validate() const {
+  if (auto why = mask.Validate(); !why.empty()) return why;
   if (!(feather >= 0) || !std::isfinite(feather)) return "feather must be >= 0";
   if (!(strength >= 0 && strength <= 1)) return "strength must be in [0, 1]";
   if (!(transform.scale > 0) || !std::isfinite(transform.scale)) return "transform scale must be > 0";
@@ -42,7 +42,7 @@ PortalMap::PortalMap(std::shared_ptr<const QuaternionMap> base, std::vector<Port
     : base_(std::move(base)), portals_(std::move(portals)), base_set_(std::move(base_set)) {
   if (!base_) throw Error("portal map: no base map");
   for (std::size_t i = 0; i < portals_.size(); ++i) {
-    if (auto why = portals_[i].validate(); !why.empty()) throw Error("portal " + std::to_string(i) + ": " + why);
+    if (auto why = portals_[i].Validate(); !why.empty()) throw Error("portal " + std::to_string(i) + ": " + why);
     if (portals_[i].exclude_base && !base_set_)
       throw Error("portal " + std::to_string(i) + ": exclude_base needs the base set's function");
   }
@@ -123,7 +123,7 @@ Portal PortalFromJson(const JsonReader& r, const std::string& p, const std::stri
       if (t.noise.octaves < 1 || t.noise.octaves > 16) r.fail(n + "/octaves", "expected an integer in [1, 16]");
     }
   }
-  if (auto why = portal.validate(); !why.empty()) r.fail(p, why);
+  if (auto why = portal.Validate(); !why.empty()) r.fail(p, why);
   return portal;
 }
 

@@ -58,7 +58,7 @@ struct Portal {
   double strength = 1.0;  // b: B's value deep inside the mask
   bool exclude_base = false;
   PortalTransform transform;
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 class PortalMap : public QuaternionMap {

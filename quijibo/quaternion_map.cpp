@@ -5,13 +5,13 @@
 
 namespace quijibo {
 
-std::string IterationOptions::validate() const {
+std::string IterationOptions::Validate() const {
   if (iterations < 1 || iterations > 100000) return "iterations must be in [1, 100000]";
   if (!(escape_radius > 0) || !std::isfinite(escape_radius)) return "escape radius must be a positive number";
   return {};
 }
 
-std::string View2D::validate() const {
+std::string View2D::Validate() const {
   if (width < 1 || height < 1 || width > 32768 || height > 32768) return "image size must be in [1, 32768]";
   if (!(x_max > x_min) || !(y_max > y_min)) return "the view box must have x_max > x_min and y_max > y_min";
   return {};

@@ -34,7 +34,7 @@ class QuaternionMap {
 struct IterationOptions {
   int iterations = 3;
   double escape_radius = 20.0;
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 inline constexpr double kFieldClamp = 700.0;
@@ -76,7 +76,7 @@ class RationalQuaternionMap : public QuaternionMap {
 struct View2D {
   double x_min = -1, x_max = 1, y_min = -1, y_max = 1;
   int width = 1600, height = 1600;
-  std::string validate() const;
+  std::string Validate() const;
 };
 std::vector<double> SampleField2D(const QuaternionMap& map, const IterationOptions& options, const View2D& view);
 // Inside (field < 0) black; outside grey, brighter the sooner it escapes (field scaled by

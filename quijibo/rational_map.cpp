@@ -40,7 +40,7 @@ Eigen::VectorXd RationalMap::lower_bounds() const {
   return lb;
 }
 
-std::string RationalMap::validate() const {
+std::string RationalMap::Validate() const {
   if (top_roots.size() != top_exponents.size()) return "top roots and exponents differ in count";
   if (bottom_roots.size() != bottom_exponents.size())
     return "bottom roots and exponents differ in count";
@@ -64,7 +64,7 @@ std::string RationalMap::validate() const {
     if (top_roots.empty() || bottom_roots.empty() || top_roots[0] != zero || bottom_roots[0] != zero)
       return "leading_zero_roots is set but the first top and bottom roots are not at the origin";
   }
-  return frame.validate();
+  return frame.Validate();
 }
 
 json MapToJson(const RationalMap& m) {
@@ -114,7 +114,7 @@ RationalMap MapFromJson(const json& j, const std::string& source) {
       if (r.array_size("/frame/origin") != 3) r.fail("/frame/origin", "expected an array of 3 numbers");
       for (int a = 0; a < 3; ++a) m.frame.origin[a] = r.number("/frame/origin/" + std::to_string(a));
     }
-    if (auto why = m.frame.validate(); !why.empty()) r.fail("/frame", why);
+    if (auto why = m.frame.Validate(); !why.empty()) r.fail("/frame", why);
   }
   m.ln_C = r.number("/ln_C");
   m.tau = r.number_at_least("/tau", 0.0);
@@ -138,12 +138,12 @@ RationalMap MapFromJson(const json& j, const std::string& source) {
   roots("top", m.top_roots, m.top_exponents);
   roots("bottom", m.bottom_roots, m.bottom_exponents);
   if (r.has("/provenance")) m.provenance = r.at("/provenance");
-  if (auto why = m.validate(); !why.empty()) r.fail("", why);
+  if (auto why = m.Validate(); !why.empty()) r.fail("", why);
   return m;
 }
 
 void WriteMap(const std::string& path, const RationalMap& map) {
-  if (auto why = map.validate(); !why.empty()) throw Error(path + ": refusing to write map: " + why);
+  if (auto why = map.Validate(); !why.empty()) throw Error(path + ": refusing to write map: " + why);
   WriteFileAtomically(path, MapToJson(map).dump(1) + "\n");
 }
 
@@ -151,7 +151,7 @@ RationalMap ReadMap(const std::string& path) {
   return MapFromJson(ParseJson(ReadFile(path), path), path);
 }
 
-std::string RandomMapOptions::validate() const {
+std::string RandomMapOptions::Validate() const {
   if (top < 0 || bottom < 0) return "root counts must be >= 0";
   if (!(root_radius > 0)) return "root_radius must be > 0";
   if (!(exponent_min >= 0 && exponent_max >= exponent_min)) return "need 0 <= exponent_min <= exponent_max";
@@ -160,7 +160,7 @@ std::string RandomMapOptions::validate() const {
 }
 
 RationalMap InFrame(const RationalMap& map, const FractalFrame& to) {
-  if (auto why = to.validate(); !why.empty()) throw Error("frame change: " + why);
+  if (auto why = to.Validate(); !why.empty()) throw Error("frame change: " + why);
   const FractalFrame& from = map.frame;
   if (to.scale != from.scale || to.translation != from.translation || to.padding != from.padding)
     throw Error("frame change: the new frame must keep the map's normalization (scale, translation, padding)");
@@ -257,7 +257,7 @@ RationalMap WithDetail(const RationalMap& map, double detail, double* lambda) {
 }
 
 RationalMap RandomMap(const RandomMapOptions& o) {
-  if (auto why = o.validate(); !why.empty()) throw Error("random map: " + why);
+  if (auto why = o.Validate(); !why.empty()) throw Error("random map: " + why);
   // mt19937_64 and hand-made uniform draws: std::uniform_real_distribution's output is not
   // specified bit-for-bit across standard libraries.
   std::mt19937_64 rng(o.seed);

@@ -55,7 +55,9 @@ struct RationalMap {
   Eigen::VectorXd lower_bounds() const;
 
   // Empty string when consistent, else the first problem found.
-  std::string validate() const;
+  std::string Validate() const;
+  // Also under this name: optim/, the energy evaluators and the Python module call it so.
+  std::string validate() const { return Validate(); }
 
   template <class Real>
   Quaternion<Real> top_root(int i) const {
@@ -156,7 +158,7 @@ struct RandomMapOptions {
   double ln_C = 0.0;
   bool leading_zero_roots = false;
   std::uint64_t seed = 1;
-  std::string validate() const;
+  std::string Validate() const;
 };
 RationalMap RandomMap(const RandomMapOptions& options);
 

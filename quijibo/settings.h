@@ -71,7 +71,7 @@ nlohmann::json DescribeSetting(const std::string& key, const std::string& flag, 
                                SettingType type, const nlohmann::json& default_value, double lo, double hi,
                                bool open_lo, bool open_hi, const std::vector<std::string>& choices,
                                const std::vector<int>& sizes);
-// For a library's validate(): "" or "<name>: expected an integer in [8, 1024], found 0".
+// For a library's Validate(): "" or "<name>: expected an integer in [8, 1024], found 0".
 std::string CheckRange(const std::string& name, SettingType type, double value, const ValueRange& range);
 // What is wrong with `value` for a setting of this type, range and choices; empty when valid.
 std::string CheckValue(const nlohmann::json& value, SettingType type, double lo, double hi, bool open_lo, bool open_hi,
@@ -114,17 +114,11 @@ class Schema {
   }
   template <class Ref>
   Schema& Integer(std::string key, std::string flag, std::string help, Ref ref, const ValueRange& r) {
-    Setting<O> s = Typed(std::move(key), std::move(flag), std::move(help), SettingType::kInteger, ref, r.lo, r.hi,
-                         r.open_lo);
-    s.open_hi = r.open_hi;
-    return Add(std::move(s));
+    return Add(Ranged(std::move(key), std::move(flag), std::move(help), SettingType::kInteger, ref, r));
   }
   template <class Ref>
   Schema& Number(std::string key, std::string flag, std::string help, Ref ref, const ValueRange& r) {
-    Setting<O> s = Typed(std::move(key), std::move(flag), std::move(help), SettingType::kNumber, ref, r.lo, r.hi,
-                         r.open_lo);
-    s.open_hi = r.open_hi;
-    return Add(std::move(s));
+    return Add(Ranged(std::move(key), std::move(flag), std::move(help), SettingType::kNumber, ref, r));
   }
   template <class Ref>
   Schema& Boolean(std::string key, std::string flag, std::string help, Ref ref) {
@@ -299,6 +293,14 @@ class Schema {
       s.get = [ref](const O& o) -> nlohmann::json { return ToJsonValue<M>(ref(const_cast<O&>(o))); };
       s.set = [ref](O& o, const nlohmann::json& v) { ref(o) = FromJsonValue<M>(v); };
     }
+    return s;
+  }
+  // A setting whose range is a shared ValueRange (both ends' openness from it).
+  template <class Ref>
+  static Setting<O> Ranged(std::string key, std::string flag, std::string help, SettingType type, Ref ref,
+                           const ValueRange& r) {
+    Setting<O> s = Typed(std::move(key), std::move(flag), std::move(help), type, ref, r.lo, r.hi, r.open_lo);
+    s.open_hi = r.open_hi;
     return s;
   }
   // Integers are written as JSON integers, numbers as JSON numbers with a fraction (97 vs 97.0 in

@@ -50,7 +50,7 @@ double Take(std::map<std::string, double>& p, const std::string& key, double fal
 }  // namespace
 
 ScalarGrid AnalyticTarget(const std::string& spec, const GridFrame& frame) {
-  if (auto why = frame.validate(); !why.empty()) throw Error("target grid: " + why);
+  if (auto why = frame.Validate(); !why.empty()) throw Error("target grid: " + why);
   std::string name;
   auto p = ParseSpec(spec, name);
   ScalarGrid g;

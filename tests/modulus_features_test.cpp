@@ -180,7 +180,7 @@ TEST(SdfMask, DistanceIsTheGridPlacedAndScaled) {
   m.sdf = SphereGrid(0.2, 64);
   m.center = {0.1, -0.05, 0.0};
   m.sdf_scale = 1.5;  // a ball of radius 0.3 about the centre
-  ASSERT_EQ(m.validate(), "");
+  ASSERT_EQ(m.Validate(), "");
   for (int i = 0; i < 30; ++i) {
     const Vec3 p{-0.6 + 0.04 * i, 0.1 - 0.01 * i, 0.03 * std::sin(i)};
     const double exact = std::hypot(p[0] - 0.1, p[1] + 0.05, p[2]) - 0.3;
@@ -374,7 +374,7 @@ TEST(Portal, OnAQuijiboMapRepeatsItsSet) {
   RationalMap m;
   m.top_roots = {{0, 0, 0, 0}};
   m.top_exponents = {2.0};
-  ASSERT_EQ(m.validate(), "");
+  ASSERT_EQ(m.Validate(), "");
   auto rm = std::make_shared<RationalQuaternionMap>(m);
   Portal p;
   p.mask.center = {1.5, 0, 0};

@@ -17,11 +17,8 @@ int main(int argc, char** argv) {
     CLI::App app{
         "quijibo-mpi: `quijibo mesh` distributed over MPI ranks, and parameter sweeps (docs/mpi.md).\n"
         "Run it under mpirun/srun; every rank gets the same arguments."};
-    app.set_version_flag("--version", "quijibo-mpi 0.1.0");
-    app.require_subcommand(1);
     bool quiet = false;
-    app.add_flag("-q,--quiet", quiet, "No progress on stderr");
-    app.parse_complete_callback([&] { quijibo::Progress::globally_quiet() = quiet || rank != 0; });
+    quijibo::cli::SetUpApp(app, "quijibo-mpi", quiet, rank != 0);
     quijibo::cli::AddMeshCommand(app, quijibo::mpi::MpiMesher);
     quijibo::mpi::AddSweep(app);
     try {

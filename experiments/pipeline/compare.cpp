@@ -1,7 +1,5 @@
 #include "experiments/pipeline/compare.h"
 
-#include <omp.h>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -64,149 +62,131 @@ const Schema<CompareOptions>& CompareOptions::Settings() {
 std::string CompareOptions::Validate() const {
   if (std::string why = Settings().Check(*this); !why.empty()) return why;
   if (std::string why = modulus.Validate(); !why.empty()) return why;
-  if (std::string why = modulus_iteration.validate(); !why.empty()) return why;
-  return quijibo_iteration.validate();
+  if (std::string why = modulus_iteration.Validate(); !why.empty()) return why;
+  return quijibo_iteration.Validate();
 }
 
-CompareResult Compare(const CompareOptions& o) {
-  if (std::string why = o.Validate(); !why.empty()) throw Error("compare: " + why);
-  Outputs outs;
-  const RationalMap rmap = ReadMap(o.map);
-  mesh::CheckSameFrame(rmap.frame, o.map, o.target);
-  const auto grid = std::make_shared<ScalarGrid>(ReadGrid(o.target));
-  // QUIJIBO fit time.
-  json qj_fit = nullptr;
-  if (o.quijibo_seconds) {
-    qj_fit = *o.quijibo_seconds;
-  } else {
-    const auto summary = std::filesystem::path(o.map).parent_path() / "summary.json";
-    if (std::filesystem::exists(summary)) {
-      const json sj = ParseJson(ReadFile(summary.string()), summary.string());
-      JsonReader sr(sj, summary.string());
-      if (sr.has("/seconds")) qj_fit = sr.number("/seconds");
-    }
-  }
-  // Shape modulus "fit": load the target into the unit frame and get a versor.
-  double t0 = WallSeconds();
-  FractalFrame f;
-  if (std::filesystem::exists(mesh::FrameJsonPathFor(o.target)))
-    f = mesh::ReadFrameJson(mesh::FrameJsonPathFor(o.target));
+namespace {
+
+// QUIJIBO's fit time: the option, else the optimizer's summary.json next to the map, else null.
+json QuijiboFitSeconds(const CompareOptions& o) {
+  if (o.quijibo_seconds) return *o.quijibo_seconds;
+  const auto summary = std::filesystem::path(o.map).parent_path() / "summary.json";
+  if (!std::filesystem::exists(summary)) return nullptr;
+  const json sj = ParseJson(ReadFile(summary.string()), summary.string());
+  JsonReader sr(sj, summary.string());
+  return sr.has("/seconds") ? json(sr.number("/seconds")) : json(nullptr);
+}
+
+// The shape modulus "fit": the target in the unit frame (k unit lengths per fractal-frame one)
+// and its versor, timed.
+struct ModulusFit {
   double k = 1;
-  ModulusTarget target = ModulusTargetFromGrid(grid, f.fractal_radius, f.padding, &k);
-  const Versor v = o.modulus.versor.Make(target);
-  ShapeModulusOptions so = o.modulus.shape;
-  if (o.modulus.params) mesh::ReadModulusParams(*o.modulus.params, so, o.modulus.sdf_resolution);
-  auto sm = std::make_shared<ShapeModulusMap>(target, v, so);
-  const double sm_fit = WallSeconds() - t0;
-  auto qj = std::make_shared<RationalQuaternionMap>(rmap);
-  const IterationOptions sjo = o.modulus_iteration, qjo = o.quijibo_iteration;
-  if (auto why = sjo.validate(); !why.empty()) throw Error(why);
-  if (auto why = qjo.validate(); !why.empty()) throw Error(why);
-  // Fields on the grid (fractal frame): one application (the 2015 energy's L) and n iterates.
-  const EnergyGrid eg = MakeEnergyGrid(*grid, ParseWeightField(o.weights));
+  ShapeModulusOptions shape;
+  Versor versor;
+  std::shared_ptr<const ShapeModulusMap> map;
+  double seconds = 0;
+};
+
+ModulusFit FitModulus(const CompareOptions& o, const std::shared_ptr<const ScalarGrid>& grid) {
+  const double t0 = WallSeconds();
+  FractalFrame f;
+  if (std::filesystem::exists(mesh::FrameJsonPathFor(o.target))) f = mesh::ReadFrameJson(mesh::FrameJsonPathFor(o.target));
+  ModulusFit fit;
+  ModulusTarget target = ModulusTargetFromGrid(grid, f.fractal_radius, f.padding, &fit.k);
+  fit.versor = o.modulus.versor.Make(target);
+  fit.shape = o.modulus.shape;
+  if (o.modulus.params) mesh::ReadModulusParams(*o.modulus.params, fit.shape, o.modulus.sdf_resolution);
+  fit.map = std::make_shared<ShapeModulusMap>(target, fit.versor, fit.shape);
+  fit.seconds = WallSeconds() - t0;
+  return fit;
+}
+
+// A method's fields on the energy grid's cells: one application (the 2015 energy's L) and n iterates.
+struct MethodFields {
+  std::vector<double> one, iterated;
+};
+
+// Both methods' fields, QUIJIBO's at the cells (fractal frame), the shape modulus's at k times them.
+std::pair<MethodFields, MethodFields> SampleFields(const EnergyGrid& eg, const RationalQuaternionMap& qj,
+                                                  const IterationOptions& qjo, const ModulusFit& sm,
+                                                  const IterationOptions& sjo) {
   const std::int64_t cells = eg.frame.cell_count();
-  std::vector<double> qj1(cells), qjn(cells), sm1(cells), smn(cells);
+  MethodFields q{std::vector<double>(cells), std::vector<double>(cells)};
+  MethodFields s{std::vector<double>(cells), std::vector<double>(cells)};
+  const double k = sm.k;
 #pragma omp parallel for schedule(dynamic, 1024)
   for (std::int64_t c = 0; c < cells; ++c) {
     const Vec3 w = eg.frame.cell_center(c);
     const Quat qw{w[0], w[1], w[2], eg.slice}, qu{k * w[0], k * w[1], k * w[2], 0.0};
-    qj1[c] = qj->LogModulus(qw);
-    qjn[c] = IterateField(*qj, qw, qjo);
-    sm1[c] = sm->LogModulus(qu);
-    smn[c] = IterateField(*sm, qu, sjo);
+    q.one[c] = qj.LogModulus(qw);
+    q.iterated[c] = IterateField(qj, qw, qjo);
+    s.one[c] = sm.map->LogModulus(qu);
+    s.iterated[c] = IterateField(*sm.map, qu, sjo);
   }
-  auto iou = [&](const std::vector<double>& fld) {
-    std::int64_t both = 0, either = 0;
-    for (std::int64_t c = 0; c < cells; ++c) {
-      const bool a1 = fld[c] < 0, b1 = grid->values[c] < 0;
-      both += a1 && b1;
-      either += a1 || b1;
-    }
-    return IntersectionOverUnion(both, either);
-  };
-  // Meshes over the grid's box, in the fractal frame.
+  return {std::move(q), std::move(s)};
+}
+
+// A mesh with its wall and CPU seconds.
+struct TimedMesh {
+  mesh::TriangleMesh mesh;
+  double seconds = 0, cpu_seconds = 0;
+};
+
+TimedMesh MeshTimed(const mesh::BatchField& field, const mesh::MeshingOptions& mo) {
+  const double m0 = WallSeconds(), c0 = CpuSeconds();
+  TimedMesh t;
+  t.mesh = mesh::MeshField(field, mo);
+  t.seconds = WallSeconds() - m0, t.cpu_seconds = CpuSeconds() - c0;
+  return t;
+}
+
+// The meshing box: the target grid's, in the fractal frame.
+mesh::MeshingOptions GridBox(const ScalarGrid& grid, int resolution) {
   mesh::MeshingOptions mo;
-  mo.min_corner = grid->frame.min_corner;
-  for (int ax = 0; ax < 3; ++ax) mo.max_corner[ax] = mo.min_corner[ax] + grid->frame.extent()[ax];
-  mo.resolution = o.resolution;
-  mesh::BatchField target_field;
-  target_field.evaluate = [grid](const Vec3* p, std::size_t n, double* out) {
-    for (std::size_t i = 0; i < n; ++i) out[i] = ExtendedSample(*grid, p[i]);
-  };
-  mesh::MeshingSummary ms_t, ms_q, ms_s;
-  const mesh::TriangleMesh target_mesh = mesh::MeshField(target_field, mo, &ms_t);
-  double m0 = WallSeconds(), c0 = CpuSeconds();
-  const mesh::TriangleMesh qj_mesh = mesh::MeshField(mesh::MakeQuaternionMapField(qj, qjo, 1.0), mo, &ms_q);
-  const double qj_mesh_s = WallSeconds() - m0, qj_mesh_cpu = CpuSeconds() - c0;
-  m0 = WallSeconds(), c0 = CpuSeconds();
-  const mesh::TriangleMesh sm_mesh = mesh::MeshField(mesh::MakeQuaternionMapField(sm, sjo, k), mo, &ms_s);
-  const double sm_mesh_s = WallSeconds() - m0, sm_mesh_cpu = CpuSeconds() - c0;
-  const auto ts = mesh::SampleSurface(target_mesh, o.samples, 1);
-  auto chamfer = [&](const mesh::TriangleMesh& m) -> json {
-    const auto ms = mesh::SampleSurface(m, o.samples, 2);
-    if (ms.empty()) return {{"to_target", nullptr}, {"from_target", nullptr}, {"chamfer", nullptr}};
-    const double to = mesh::Mean(mesh::NearestPointDistances(ms, ts));
-    const double from = mesh::Mean(mesh::NearestPointDistances(ts, ms));
-    return {{"to_target", to}, {"from_target", from}, {"chamfer", to + from}};
-  };
-  const json qj_ch = chamfer(qj_mesh), sm_ch = chamfer(sm_mesh);
-  const Image qj_img = mesh::InsideSlice(
-      [&](const Vec3& p) {
-        return IterateField(*qj, {p[0], p[1], p[2], 0}, qjo);
-      },
-      *grid, o.png_size);
-  const Image sm_img = mesh::InsideSlice(
-      [&](const Vec3& p) {
-        return IterateField(*sm, {k * p[0], k * p[1], k * p[2], 0}, sjo);
-      },
-      *grid, o.png_size);
-  auto method = [&](const std::string& name, json fit, double psi1, double psin, double io, const json& ch,
-                    const mesh::TriangleMesh& m, double ms, double mcpu, const std::string& png,
-                    const std::string& ply) {
-    return json{{"method", name},
-                {"fit_seconds", fit},
-                {"psi_one_application", psi1},
-                {"psi_iterated", psin},
-                {"iou", io},
-                {"chamfer", ch},
-                {"triangles", m.triangles.size()},
-                {"mesh_seconds", ms},
-                {"mesh_cpu_seconds", mcpu},
-                {"picture", png},
-                {"mesh", ply}};
-  };
-  const double diag = std::hypot(grid->frame.extent()[0], grid->frame.extent()[1], grid->frame.extent()[2]);
-  json report = {{"target", o.target},
-                 {"map", o.map},
-                 {"grid", {{"dims", grid->frame.dims}, {"spacing", grid->frame.spacing}, {"box_diagonal", diag}}},
-                 {"energy", {{"alpha", o.energy_alpha}, {"weights", o.weights}, {"eta", eg.eta}}},
-                 {"mesh_resolution", o.resolution},
-                 {"unit_per_fractal", k},
-                 {"shape_modulus",
-                  {{"alpha", ParameterFieldToJson(so.alpha)},
-                   {"beta", ParameterFieldToJson(so.beta)},
-                   {"iterations", sjo.iterations},
-                   {"escape_radius", sjo.escape_radius},
-                   {"versor", v.polynomial.description}}},
-                 {"quijibo", {{"iterations", qjo.iterations}, {"escape_radius", qjo.escape_radius}}},
-                 {"target_mesh_triangles", target_mesh.triangles.size()},
-                 {"methods", json::array({method("QUIJIBO", qj_fit, EnergyOfField(eg, qj1, o.energy_alpha),
-                                                 EnergyOfField(eg, qjn, o.energy_alpha), iou(qjn), qj_ch, qj_mesh,
-                                                 qj_mesh_s, qj_mesh_cpu, "quijibo.png", "quijibo.ply"),
-                                          method("shape modulus", sm_fit, EnergyOfField(eg, sm1, o.energy_alpha),
-                                                 EnergyOfField(eg, smn, o.energy_alpha), iou(smn), sm_ch, sm_mesh,
-                                                 sm_mesh_s, sm_mesh_cpu, "modulus.png", "modulus.ply")})}};
-  // Markdown.
-  std::ostringstream md;
+  mo.min_corner = grid.frame.min_corner;
+  for (int ax = 0; ax < 3; ++ax) mo.max_corner[ax] = mo.min_corner[ax] + grid.frame.extent()[ax];
+  mo.resolution = resolution;
+  return mo;
+}
+
+// The sample Chamfer of a method's mesh against the target's samples (nulls without a surface).
+json ChamferJson(const mesh::TriangleMesh& m, const std::vector<Vec3>& target_samples, int samples) {
+  const auto ms = mesh::SampleSurface(m, samples, 2);
+  if (ms.empty()) return {{"to_target", nullptr}, {"from_target", nullptr}, {"chamfer", nullptr}};
+  const mesh::SampleChamfer c = mesh::MeasureSampleChamfer(ms, target_samples);
+  return {{"to_target", c.to_target}, {"from_target", c.from_target}, {"chamfer", c.sum()}};
+}
+
+// One method's entry of compare.json.
+json MethodJson(const std::string& name, const json& fit_seconds, const EnergyGrid& eg, double alpha,
+                const MethodFields& fields, const ScalarGrid& grid, const json& chamfer, const TimedMesh& m,
+                const std::string& picture, const std::string& ply) {
+  return json{{"method", name},
+              {"fit_seconds", fit_seconds},
+              {"psi_one_application", EnergyOfField(eg, fields.one, alpha)},
+              {"psi_iterated", EnergyOfField(eg, fields.iterated, alpha)},
+              {"iou", InsideIntersectionOverUnion(fields.iterated, grid.values)},
+              {"chamfer", chamfer},
+              {"triangles", m.mesh.triangles.size()},
+              {"mesh_seconds", m.seconds},
+              {"mesh_cpu_seconds", m.cpu_seconds},
+              {"picture", picture},
+              {"mesh", ply}};
+}
+
+// compare.md: the table of the two methods' figures in `report`.
+std::string CompareMarkdown(const CompareOptions& o, const ScalarGrid& grid, double diag, const json& report) {
   auto num = [](const json& j, int prec = 4) {
     if (j.is_null()) return std::string("n/a");
     char b[64];
     std::snprintf(b, sizeof b, "%.*g", prec, j.get<double>());
     return std::string(b);
   };
+  std::ostringstream md;
   md << "# QUIJIBO vs shape modulus on " << o.target << "\n\n"
-     << "Map: `" << o.map << "`. Grid " << grid->frame.dims[0] << "x" << grid->frame.dims[1] << "x"
-     << grid->frame.dims[2] << " (the target SDF's cells). psi: 2015 energy, tanh sharpness " << o.energy_alpha << ", "
+     << "Map: `" << o.map << "`. Grid " << grid.frame.dims[0] << "x" << grid.frame.dims[1] << "x"
+     << grid.frame.dims[2] << " (the target SDF's cells). psi: 2015 energy, tanh sharpness " << o.energy_alpha << ", "
      << o.weights << " weights. Chamfer in fractal-frame units (box diagonal " << num(diag)
      << "), mean nearest-sample distance each way, " << o.samples << " samples per mesh; meshes at " << o.resolution
      << " cells. Inside = log|q_n| < 0.\n\n"
@@ -224,17 +204,80 @@ CompareResult Compare(const CompareOptions& o) {
      << "| meshing wall / CPU (s) | " << num(q["mesh_seconds"]) << " / " << num(q["mesh_cpu_seconds"]) << " | "
      << num(s["mesh_seconds"]) << " / " << num(s["mesh_cpu_seconds"]) << " |\n"
      << "| picture (slice z = 0; red = target) | ![](quijibo.png) | ![](modulus.png) |\n";
-  std::filesystem::create_directories(o.out_dir);
-  auto path = [&](const std::string& n) { return (std::filesystem::path(o.out_dir) / n).string(); };
-  WritePng(path("quijibo.png"), qj_img), outs.Add(path("quijibo.png"));
-  WritePng(path("modulus.png"), sm_img), outs.Add(path("modulus.png"));
-  mesh::WritePly(path("quijibo.ply"), qj_mesh), outs.Add(path("quijibo.ply"));
-  mesh::TriangleMesh sm_fractal = sm_mesh;  // already in the fractal frame (points scaled by k inside the field)
-  mesh::WritePly(path("modulus.ply"), sm_fractal), outs.Add(path("modulus.ply"));
-  WriteFileAtomically(path("compare.json"), report.dump(1) + "\n"), outs.Add(path("compare.json"));
-  WriteFileAtomically(path("compare.md"), md.str()), outs.Add(path("compare.md"));
+  return md.str();
+}
+
+}  // namespace
+
+CompareResult Compare(const CompareOptions& o) {
+  if (std::string why = o.Validate(); !why.empty()) throw Error("compare: " + why);
+  const RationalMap rmap = ReadMap(o.map);
+  mesh::CheckSameFrame(rmap.frame, o.map, o.target);
+  const auto grid = std::make_shared<const ScalarGrid>(ReadGrid(o.target));
+  const json qj_fit = QuijiboFitSeconds(o);
+  const ModulusFit sm = FitModulus(o, grid);
+  const auto qj = std::make_shared<const RationalQuaternionMap>(rmap);
+  const IterationOptions& sjo = o.modulus_iteration;
+  const IterationOptions& qjo = o.quijibo_iteration;
+  const EnergyGrid eg = MakeEnergyGrid(*grid, ParseWeightField(o.weights));
+  const auto [qj_fields, sm_fields] = SampleFields(eg, *qj, qjo, sm, sjo);
+
+  // Meshes over the grid's box, in the fractal frame (the shape modulus's field scales by k).
+  const mesh::MeshingOptions mo = GridBox(*grid, o.resolution);
+  mesh::BatchField target_field;
+  target_field.evaluate = [grid](const Vec3* p, std::size_t n, double* out) {
+    for (std::size_t i = 0; i < n; ++i) out[i] = ExtendedSample(*grid, p[i]);
+  };
+  const mesh::TriangleMesh target_mesh = mesh::MeshField(target_field, mo);
+  TimedMesh qj_mesh = MeshTimed(mesh::MakeQuaternionMapField(qj, qjo, 1.0), mo);
+  TimedMesh sm_mesh = MeshTimed(mesh::MakeQuaternionMapField(sm.map, sjo, sm.k), mo);
+  const auto ts = mesh::SampleSurface(target_mesh, o.samples, 1);
+
+  CompareResult result;
+  result.quijibo.picture = mesh::InsideSlice(
+      [&](const Vec3& p) { return IterateField(*qj, {p[0], p[1], p[2], 0}, qjo); }, *grid, o.png_size);
+  result.modulus.picture = mesh::InsideSlice(
+      [&](const Vec3& p) { return IterateField(*sm.map, {sm.k * p[0], sm.k * p[1], sm.k * p[2], 0}, sjo); }, *grid,
+      o.png_size);
+  const double diag = std::hypot(grid->frame.extent()[0], grid->frame.extent()[1], grid->frame.extent()[2]);
+  result.report = {
+      {"target", o.target},
+      {"map", o.map},
+      {"grid", {{"dims", grid->frame.dims}, {"spacing", grid->frame.spacing}, {"box_diagonal", diag}}},
+      {"energy", {{"alpha", o.energy_alpha}, {"weights", o.weights}, {"eta", eg.eta}}},
+      {"mesh_resolution", o.resolution},
+      {"unit_per_fractal", sm.k},
+      {"shape_modulus",
+       {{"alpha", ParameterFieldToJson(sm.shape.alpha)},
+        {"beta", ParameterFieldToJson(sm.shape.beta)},
+        {"iterations", sjo.iterations},
+        {"escape_radius", sjo.escape_radius},
+        {"versor", sm.versor.polynomial.description}}},
+      {"quijibo", {{"iterations", qjo.iterations}, {"escape_radius", qjo.escape_radius}}},
+      {"target_mesh_triangles", target_mesh.triangles.size()},
+      {"methods", json::array({MethodJson("QUIJIBO", qj_fit, eg, o.energy_alpha, qj_fields, *grid,
+                                          ChamferJson(qj_mesh.mesh, ts, o.samples), qj_mesh, "quijibo.png",
+                                          "quijibo.ply"),
+                               MethodJson("shape modulus", sm.seconds, eg, o.energy_alpha, sm_fields, *grid,
+                                          ChamferJson(sm_mesh.mesh, ts, o.samples), sm_mesh, "modulus.png",
+                                          "modulus.ply")})}};
+  result.markdown = CompareMarkdown(o, *grid, diag, result.report);
+  result.quijibo.mesh = std::move(qj_mesh.mesh);
+  result.modulus.mesh = std::move(sm_mesh.mesh);
+  return result;
+}
+
+void WriteCompare(const CompareResult& r, const std::string& out_dir) {
+  Outputs outs;
+  std::filesystem::create_directories(out_dir);
+  auto path = [&](const std::string& n) { return (std::filesystem::path(out_dir) / n).string(); };
+  WritePng(path("quijibo.png"), r.quijibo.picture), outs.Add(path("quijibo.png"));
+  WritePng(path("modulus.png"), r.modulus.picture), outs.Add(path("modulus.png"));
+  mesh::WritePly(path("quijibo.ply"), r.quijibo.mesh), outs.Add(path("quijibo.ply"));
+  mesh::WritePly(path("modulus.ply"), r.modulus.mesh), outs.Add(path("modulus.ply"));
+  WriteFileAtomically(path("compare.json"), r.report.dump(1) + "\n"), outs.Add(path("compare.json"));
+  WriteFileAtomically(path("compare.md"), r.markdown), outs.Add(path("compare.md"));
   outs.Commit();
-  return {report, md.str()};
 }
 
 }  // namespace quijibo::pipeline

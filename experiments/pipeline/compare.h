@@ -1,5 +1,6 @@
 // The compare stage: a QUIJIBO map against the shape modulus of the same target (fit time, psi of
-// one application and of n iterates, IoU, Chamfer, meshes and slice pictures).
+// one application and of n iterates, IoU, Chamfer, meshes and slice pictures). `Compare` computes
+// and returns them; `WriteCompare` (the command line) writes them.
 #pragma once
 
 #include <cmath>
@@ -9,7 +10,9 @@
 
 #include "experiments/pipeline/modulus.h"
 #include "experiments/pipeline/settings.h"
+#include "mesh/triangle_mesh.h"
 #include "quijibo/energy.h"
+#include "quijibo/image.h"
 #include "quijibo/julia.h"
 #include "quijibo/quaternion_map.h"
 
@@ -18,7 +21,6 @@ namespace quijibo::pipeline {
 struct CompareOptions {
   std::string target;                  // .qgrid from `quijibo sdf` (fractal frame; its .frame.json is used)
   std::string map;                     // QUIJIBO map.json (fractal frame)
-  std::string out_dir;                 // compare.md, compare.json, PNGs, PLYs
   ModulusStageOptions modulus;         // alpha, beta, params, versor poly (else generated in the target's box)
   IterationOptions modulus_iteration;  // the shape modulus's n and escape radius
   // QUIJIBO's: the same n as the shape modulus by default, the mesh stage's escape radius.
@@ -34,12 +36,23 @@ struct CompareOptions {
   static const Schema<CompareOptions>& Settings();
 };
 
-struct CompareResult {
-  nlohmann::json report;  // compare.json
-  std::string markdown;   // compare.md (`quijibo compare` prints it)
+// What one method gave: the slice picture and the mesh (fractal frame) that compare.json names.
+struct CompareProducts {
+  Image picture{1, 1};
+  mesh::TriangleMesh mesh;
 };
 
-// Computes the comparison and writes its files into out_dir (all or nothing).
+struct CompareResult {
+  nlohmann::json report;  // compare.json: the settings and, per method, the figures
+  std::string markdown;   // compare.md (`quijibo compare` prints it)
+  CompareProducts quijibo, modulus;
+};
+
+// Computes the comparison. Writes nothing; throws quijibo::Error on invalid options or inputs.
 CompareResult Compare(const CompareOptions& options);
+
+// Writes compare.json, compare.md, quijibo.png, modulus.png, quijibo.ply and modulus.ply into
+// `out_dir` (created; all or nothing).
+void WriteCompare(const CompareResult& result, const std::string& out_dir);
 
 }  // namespace quijibo::pipeline

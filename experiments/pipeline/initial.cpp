@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "experiments/pipeline/initial_pictures.h"
+#include "experiments/pipeline/product.h"
 #include "mesh/sdf_command.h"
 #include "quijibo/energy.h"
 #include "quijibo/error.h"
@@ -27,150 +28,178 @@ auto Kind(std::initializer_list<const char*> kinds) {
   return [k](const O& o) { return std::find(k.begin(), k.end(), o.kind) != k.end(); };
 }
 
-double Since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+// The log-kernel fit's settings (monopole/kernel_fit.h).
+void AddLogKernelSettings(Schema<O>& s) {
+  s.Integer(
+          "roots", "--roots", "log-kernel: at least this many root positions (pairs on the surface normals)",
+          [](auto& o) -> int& { return o.kernel.roots; }, 8, 4000)
+      .Doc("log-kernel: at least this many root positions: pairs along the normals of blue-noise surface samples "
+           "(`monopole/kernel_fit.h`)")
+      .When(Kind({"log-kernel"}))
+      .Integer(
+          "max_roots", "--max-roots",
+          "log-kernel: at most this many roots (or --roots, if larger) where the spacing rule asks for more",
+          [](auto& o) -> int& { return o.kernel.max_roots; }, 8, 4000)
+      .Doc("log-kernel: at most max(`roots`, `max_roots`) roots")
+      .When(Kind({"log-kernel"}))
+      .Number(
+          "root_spacing", "--root-spacing",
+          "log-kernel: largest distance between root pairs, in units of their offset (sets how many roots a "
+          "shape gets)",
+          [](auto& o) -> double& { return o.kernel.spacing; }, 1.0, 100.0)
+      .Doc("log-kernel: largest distance between root pairs in units of their size (the shorter offset): denser pairs "
+           "on thin walls, and the shape sets the count ([fidelity.md](fidelity.md))")
+      .When(Kind({"log-kernel"}))
+      .Number(
+          "root_offset", "--root-offset", "log-kernel: distance of the roots from the surface, in cells",
+          [](auto& o) -> double& { return o.kernel.offset_cells; }, 0.0, 50.0, true)
+      .Doc("log-kernel: distance of a root from the surface, in target cells (shortened in thin parts)")
+      .When(Kind({"log-kernel"}))
+      .Number(
+          "band", "--band", "log-kernel: half-width of the band where L follows the distance, in cells",
+          [](auto& o) -> double& { return o.kernel.band_cells; }, 0.0, 50.0, true)
+      .When(Kind({"log-kernel"}))
+      .Number(
+          "band_amplitude", "--band-amplitude", "log-kernel: |L| at the band's edge",
+          [](auto& o) -> double& { return o.kernel.amplitude; }, 0.0, 100.0, true)
+      .When(Kind({"log-kernel"}))
+      .Number(
+          "ridge", "--ridge", "log-kernel: Tikhonov weight on the exponents",
+          [](auto& o) -> double& { return o.kernel.ridge; }, 0.0, 1.0)
+      .Doc("log-kernel: Tikhonov weight on the exponents (relative to the normal matrix's mean diagonal)")
+      .When(Kind({"log-kernel"}))
+      .Boolean("origin_root", "--no-origin-root",
+               "log-kernel: leave out the top root at the fractal origin (monopole/kernel_fit.h)",
+               [](auto& o) -> bool& { return o.kernel.origin_root; })
+      .Doc("log-kernel: a top root of exponent 1 at the fractal origin: the origin becomes a zero of R, so orbits "
+           "trapped there converge ([fidelity.md](fidelity.md)); `--no-origin-root` leaves it out")
+      .When(Kind({"log-kernel"}))
+      .Integer(
+          "refine_rounds", "--refine-rounds",
+          "log-kernel: rounds that add root pairs where the fit is on the wrong side (thin walls)",
+          [](auto& o) -> int& { return o.kernel.refine_rounds; }, 0, 10)
+      .Doc("log-kernel: rounds that add root pairs at the surface nearest cells on the wrong side (thin walls; "
+           "[fidelity.md](fidelity.md))")
+      .When(Kind({"log-kernel"}));
+}
+
+// The paper's monopole fit's settings (monopole/fit_pipeline.h, initial_guess.h); the blue-noise seed and the picture's size are the log-kernel fit's too.
+void AddMonopoleSettings(Schema<O>& s) {
+  s.Number(
+          "epsilon", "--epsilon", "monopoles: stop at this relative residual",
+          [](auto& o) -> double& { return o.monopole.fit.epsilon; }, 0.0, 1.0, true)
+      .OpenAbove()
+      .When(Kind({"monopoles"}))
+      .Enum(
+          "fit_target", "--fit-target",
+          "monopoles: potential: fit P as the paper's text (a few positive monopoles); reference: fit 1 - P as "
+          "the reference code (hundreds of both signs; on the default unit target box it misses epsilon and its "
+          "start is inverted or collapses, docs/benchmarks.md §2)",
+          {"reference", "potential"},
+          [](const O& o) {
+            return o.monopole.target == monopole::MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
+          },
+          [](O& o, const std::string& v) {
+            o.monopole.target = v == "reference" ? monopole::MonopoleTarget::kOneMinusPotential
+                                                 : monopole::MonopoleTarget::kPotential;
+          })
+      .When(Kind({"monopoles"}))
+      .Integer(
+          "candidates", "--candidates", "monopoles: blue-noise candidates on the surface",
+          [](auto& o) -> int& { return o.monopole.sampling.count; }, 1, 100000000)
+      .When(Kind({"monopoles"}))
+      .Integer(
+          "batch", "--batch", "monopoles: fresh candidates per greedy step",
+          [](auto& o) -> std::optional<int>& { return o.batch; }, 1, 100000000)
+      .Fallback([](const O& o) { return o.monopole.fit.batch_size; })
+      .When(Kind({"monopoles"}))
+      .Integer(
+          "seed", "--seed", "monopoles: seed of the candidate order",
+          [](auto& o) -> std::uint64_t& { return o.monopole.fit.seed; }, 0, kMaxSeed)
+      .Doc("monopoles: seed of the candidate order (default: the top-level `seed`)")
+      .When(Kind({"monopoles"}))
+      .Integer(
+          "sampling_seed", "--sampling-seed", "Seed of the blue-noise sampling of the surface",
+          [](auto& o) -> std::uint64_t& { return o.kernel.seed; }, 0, kMaxSeed)
+      .Doc("log-kernel and monopoles: seed of the blue-noise sampling of the surface (default: the top-level `seed`)")
+      .When(Kind({"log-kernel", "monopoles"}))
+      .Number(
+          "offset", "--offset", "monopoles: offset of the fitting shell, in cells",
+          [](auto& o) -> std::optional<double>& { return o.offset; }, 0.0, 1000.0)
+      .Fallback([](const O& o) { return o.monopole.shell.offset_cells; })
+      .When(Kind({"monopoles"}))
+      .Integer(
+          "bem_elements", "--bem-elements", "monopoles: BEM elements (patches)",
+          [](auto& o) -> std::optional<int>& { return o.bem_elements; }, 4, 1000000)
+      .Fallback([](const O& o) { return o.monopole.bem.max_elements; })
+      .When(Kind({"monopoles"}))
+      .Number(
+          "amplitude", "--amplitude",
+          "monopoles: exponent multiplier (reference code: 3000, which saturates tanh with our fit; see "
+          "docs/benchmarks.md)",
+          [](auto& o) -> double& { return o.guess.amplitude; }, 0.0, std::numeric_limits<double>::infinity(), true)
+      .When(Kind({"monopoles"}))
+      .Boolean("zero_roots", "--no-zero-roots", "monopoles: leave out the reference's leading zero roots",
+               [](auto& o) -> bool& { return o.guess.leading_zero_roots; })
+      .Doc("monopoles: the reference's leading zero roots (`--no-zero-roots` leaves them out)")
+      .When(Kind({"monopoles"}))
+      .Integer(
+          "scan_resolution", "--scan-resolution", "monopoles: grid of the ln C scan",
+          [](auto& o) -> int& { return o.guess.scan_resolution; }, monopole::InitialGuessOptions::kScanResolutionRange)
+      .When(Kind({"monopoles"}))
+      .Integer(
+          "png_size", "--png-size", "Pixels per side of start.png (log-kernel) or potential.png (monopoles)",
+          [](auto& o) -> int& { return o.png_size; }, 16, 8192)
+      .When(Kind({"log-kernel", "monopoles"}));
+}
+
+// A random map's settings (RandomMapOptions).
+void AddRandomSettings(Schema<O>& s) {
+  s.Integer(
+          "top", "", "random: top roots", [](auto& o) -> int& { return o.random.top; }, 0, 100000)
+      .Doc("random: top roots, uniform in a ball, k = 0 (`RandomMapOptions`, as `quijibo map random`)")
+      .When(Kind({"random"}))
+      .Integer(
+          "bottom", "", "random: bottom roots", [](auto& o) -> int& { return o.random.bottom; }, 0, 100000)
+      .When(Kind({"random"}))
+      .Number(
+          "root_radius", "", "random: radius of the ball holding the roots",
+          [](auto& o) -> double& { return o.random.root_radius; }, 0.0, 1e6, true)
+      .When(Kind({"random"}))
+      .Number(
+          "exponent_min", "", "random: smallest exponent", [](auto& o) -> double& { return o.random.exponent_min; },
+          0.0, 1e6)
+      .When(Kind({"random"}))
+      .Number(
+          "exponent_max", "", "random: largest exponent (>= exponent_min)",
+          [](auto& o) -> double& { return o.random.exponent_max; }, 0.0, 1e6)
+      .Doc("random: largest exponent (>= `exponent_min`); the exponents are uniform in between, and ln C centres the "
+           "median of log|R| on the target at 0")
+      .When(Kind({"random"}))
+      .Boolean("zero_roots", "", "random: prepend the zero roots",
+               [](auto& o) -> bool& { return o.random.leading_zero_roots; })
+      .When(Kind({"random"}))
+      .Integer(
+          "seed", "", "random: seed", [](auto& o) -> std::uint64_t& { return o.random.seed; }, 0, kMaxSeed)
+      .Doc("random: seed (default: the top-level `seed`)")
+      .When(Kind({"random"}));
 }
 
 }  // namespace
 
+// The entries in the order they are read: the kind first, whose value decides which others apply.
 const Schema<O>& O::Settings() {
-  static const Schema<O> s =
-      Schema<O>()
-          .Choice("kind", "", "How the initial map is made", [](auto& o) -> std::string& { return o.kind; },
-                  {"log-kernel", "monopoles", "random", "map"})
-          // log-kernel
-          .Integer(
-              "roots", "--roots", "log-kernel: at least this many root positions (pairs on the surface normals)",
-              [](auto& o) -> int& { return o.kernel.roots; }, 8, 4000)
-          .When(Kind({"log-kernel"}))
-          .Integer(
-              "max_roots", "--max-roots",
-              "log-kernel: at most this many roots (or --roots, if larger) where the spacing rule asks for more",
-              [](auto& o) -> int& { return o.kernel.max_roots; }, 8, 4000)
-          .When(Kind({"log-kernel"}))
-          .Number(
-              "root_spacing", "--root-spacing",
-              "log-kernel: largest distance between root pairs, in units of their offset (sets how many roots a "
-              "shape gets)",
-              [](auto& o) -> double& { return o.kernel.spacing; }, 1.0, 100.0)
-          .When(Kind({"log-kernel"}))
-          .Number(
-              "root_offset", "--root-offset", "log-kernel: distance of the roots from the surface, in cells",
-              [](auto& o) -> double& { return o.kernel.offset_cells; }, 0.0, 50.0, true)
-          .When(Kind({"log-kernel"}))
-          .Number(
-              "band", "--band", "log-kernel: half-width of the band where L follows the distance, in cells",
-              [](auto& o) -> double& { return o.kernel.band_cells; }, 0.0, 50.0, true)
-          .When(Kind({"log-kernel"}))
-          .Number(
-              "band_amplitude", "--band-amplitude", "log-kernel: |L| at the band's edge",
-              [](auto& o) -> double& { return o.kernel.amplitude; }, 0.0, 100.0, true)
-          .When(Kind({"log-kernel"}))
-          .Number(
-              "ridge", "--ridge", "log-kernel: Tikhonov weight on the exponents",
-              [](auto& o) -> double& { return o.kernel.ridge; }, 0.0, 1.0)
-          .When(Kind({"log-kernel"}))
-          .Boolean("origin_root", "--no-origin-root",
-                   "log-kernel: leave out the top root at the fractal origin (monopole/kernel_fit.h)",
-                   [](auto& o) -> bool& { return o.kernel.origin_root; })
-          .When(Kind({"log-kernel"}))
-          .Integer(
-              "refine_rounds", "--refine-rounds",
-              "log-kernel: rounds that add root pairs where the fit is on the wrong side (thin walls)",
-              [](auto& o) -> int& { return o.kernel.refine_rounds; }, 0, 10)
-          .When(Kind({"log-kernel"}))
-          // monopoles
-          .Number(
-              "epsilon", "--epsilon", "monopoles: stop at this relative residual",
-              [](auto& o) -> double& { return o.monopole.fit.epsilon; }, 0.0, 1.0, true)
-          .OpenAbove()
-          .When(Kind({"monopoles"}))
-          .Enum(
-              "fit_target", "--fit-target",
-              "monopoles: potential: fit P as the paper's text (a few positive monopoles); reference: fit 1 - P as "
-              "the reference code (hundreds of both signs; on the default unit target box it misses epsilon and its "
-              "start is inverted or collapses, docs/benchmarks.md §2)",
-              {"reference", "potential"},
-              [](const O& o) {
-                return o.monopole.target == monopole::MonopoleTarget::kOneMinusPotential ? "reference" : "potential";
-              },
-              [](O& o, const std::string& v) {
-                o.monopole.target = v == "reference" ? monopole::MonopoleTarget::kOneMinusPotential
-                                                     : monopole::MonopoleTarget::kPotential;
-              })
-          .When(Kind({"monopoles"}))
-          .Integer(
-              "candidates", "--candidates", "monopoles: blue-noise candidates on the surface",
-              [](auto& o) -> int& { return o.monopole.sampling.count; }, 1, 100000000)
-          .When(Kind({"monopoles"}))
-          .Integer(
-              "batch", "--batch", "monopoles: fresh candidates per greedy step",
-              [](auto& o) -> std::optional<int>& { return o.batch; }, 1, 100000000)
-          .Fallback([](const O& o) { return o.monopole.fit.batch_size; })
-          .When(Kind({"monopoles"}))
-          .Integer(
-              "seed", "--seed", "monopoles: seed of the candidate order",
-              [](auto& o) -> std::uint64_t& { return o.monopole.fit.seed; }, 0, kMaxSeed)
-          .When(Kind({"monopoles"}))
-          .Integer(
-              "sampling_seed", "--sampling-seed", "Seed of the blue-noise sampling of the surface",
-              [](auto& o) -> std::uint64_t& { return o.kernel.seed; }, 0, kMaxSeed)
-          .When(Kind({"log-kernel", "monopoles"}))
-          .Number(
-              "offset", "--offset", "monopoles: offset of the fitting shell, in cells",
-              [](auto& o) -> std::optional<double>& { return o.offset; }, 0.0, 1000.0)
-          .Fallback([](const O& o) { return o.monopole.shell.offset_cells; })
-          .When(Kind({"monopoles"}))
-          .Integer(
-              "bem_elements", "--bem-elements", "monopoles: BEM elements (patches)",
-              [](auto& o) -> std::optional<int>& { return o.bem_elements; }, 4, 1000000)
-          .Fallback([](const O& o) { return o.monopole.bem.max_elements; })
-          .When(Kind({"monopoles"}))
-          .Number(
-              "amplitude", "--amplitude",
-              "monopoles: exponent multiplier (reference code: 3000, which saturates tanh with our fit; see "
-              "docs/benchmarks.md)",
-              [](auto& o) -> double& { return o.guess.amplitude; }, 0.0, std::numeric_limits<double>::infinity(), true)
-          .When(Kind({"monopoles"}))
-          .Boolean("zero_roots", "--no-zero-roots", "monopoles: leave out the reference's leading zero roots",
-                   [](auto& o) -> bool& { return o.guess.leading_zero_roots; })
-          .When(Kind({"monopoles"}))
-          .Integer(
-              "scan_resolution", "--scan-resolution", "monopoles: grid of the ln C scan",
-              [](auto& o) -> int& { return o.guess.scan_resolution; }, monopole::InitialGuessOptions::kScanResolutionRange)
-          .When(Kind({"monopoles"}))
-          .Integer(
-              "png_size", "--png-size", "Pixels per side of start.png (log-kernel) or potential.png (monopoles)",
-              [](auto& o) -> int& { return o.png_size; }, 16, 8192)
-          .When(Kind({"log-kernel", "monopoles"}))
-          // random
-          .Integer(
-              "top", "", "random: top roots", [](auto& o) -> int& { return o.random.top; }, 0, 100000)
-          .When(Kind({"random"}))
-          .Integer(
-              "bottom", "", "random: bottom roots", [](auto& o) -> int& { return o.random.bottom; }, 0, 100000)
-          .When(Kind({"random"}))
-          .Number(
-              "root_radius", "", "random: radius of the ball holding the roots",
-              [](auto& o) -> double& { return o.random.root_radius; }, 0.0, 1e6, true)
-          .When(Kind({"random"}))
-          .Number(
-              "exponent_min", "", "random: smallest exponent", [](auto& o) -> double& { return o.random.exponent_min; },
-              0.0, 1e6)
-          .When(Kind({"random"}))
-          .Number(
-              "exponent_max", "", "random: largest exponent (>= exponent_min)",
-              [](auto& o) -> double& { return o.random.exponent_max; }, 0.0, 1e6)
-          .When(Kind({"random"}))
-          .Boolean("zero_roots", "", "random: prepend the zero roots",
-                   [](auto& o) -> bool& { return o.random.leading_zero_roots; })
-          .When(Kind({"random"}))
-          .Integer(
-              "seed", "", "random: seed", [](auto& o) -> std::uint64_t& { return o.random.seed; }, 0, kMaxSeed)
-          .When(Kind({"random"}))
-          // map
-          .Path("map", "", "map: the map.json to start from", [](auto& o) -> std::string& { return o.map; })
-          .When(Kind({"map"}));
+  static const Schema<O> s = [] {
+    Schema<O> schema;
+    schema.Choice("kind", "", "How the initial map is made", [](auto& o) -> std::string& { return o.kind; },
+                  {"log-kernel", "monopoles", "random", "map"});
+    AddLogKernelSettings(schema);
+    AddMonopoleSettings(schema);
+    AddRandomSettings(schema);
+    schema.Path("map", "", "map: the map.json to start from", [](auto& o) -> std::string& { return o.map; })
+        .When(Kind({"map"}));
+    return schema;
+  }();
   return s;
 }
 
@@ -190,12 +219,12 @@ std::string O::Validate() const {
   if (kind == "random" && random.exponent_max < random.exponent_min)
     return "exponent_max: expected a number >= exponent_min (" + json(random.exponent_min).dump() + ")";
   if (kind == "map" && map.empty()) return "map: missing: the map.json to start from";
-  if (kind == "log-kernel") return kernel.validate();
+  if (kind == "log-kernel") return kernel.Validate();
   if (kind == "monopoles") {
-    if (std::string why = Monopoles().validate(); !why.empty()) return why;
-    return guess.validate();
+    if (std::string why = Monopoles().Validate(); !why.empty()) return why;
+    return guess.Validate();
   }
-  if (kind == "random") return random.validate();
+  if (kind == "random") return random.Validate();
   return {};
 }
 
@@ -256,6 +285,128 @@ MonopoleStartVerdict JudgeMonopoleStart(const monopole::GreedyFitSummary& fit, d
   return v;
 }
 
+namespace {
+
+// The log-kernel fit's map, its provenance the fit's settings.
+RationalMap FitLogKernel(const TargetResult& target, const O& o, monopole::KernelFitSummary& kfit) {
+  RationalMap map =
+      monopole::KernelFitMap(target.mesh.vertices, target.mesh.triangles, target.grid, target.frame, o.kernel, &kfit);
+  map.provenance = {{"made_by", "quijibo monopoles"},
+                    {"initializer", "log-kernel"},
+                    {"mesh", fs::path(target.source).filename().string()},
+                    {"resolution", target.grid.frame.dims[0]},
+                    {"roots", o.kernel.roots},
+                    {"max_roots", o.kernel.max_roots},
+                    {"root_spacing", o.kernel.spacing},
+                    {"offset_cells", o.kernel.offset_cells},
+                    {"band_cells", o.kernel.band_cells},
+                    {"band_amplitude", o.kernel.amplitude},
+                    {"ridge", o.kernel.ridge},
+                    {"origin_root", o.kernel.origin_root},
+                    {"refine_rounds", o.kernel.refine_rounds},
+                    {"sampling_seed", o.kernel.seed}};
+  return map;
+}
+
+// The paper's monopole fit (with a progress line) and the map of its charges (2015 §4.4);
+// `scan_seconds` gets the ln C scan's time.
+RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::MonopoleResult& mono,
+                           double& scan_seconds) {
+  const monopole::MonopoleOptions mo = o.Monopoles();
+  Progress progress("monopoles", 1.0, false);
+  mono = monopole::FitMonopoles(target.mesh.vertices, target.mesh.triangles, target.grid, mo,
+                                [&](const monopole::MonopoleProgress& p) {
+    if (p.stage == "fit")
+      progress.update(std::min(0.99, std::log(p.relative_residual) / std::log(mo.fit.epsilon)),
+                      "step " + std::to_string(p.step) + ", residual " + std::to_string(p.relative_residual));
+    else
+      progress.update(0.0, p.stage + " done");
+  });
+  progress.finish();
+  const auto t1 = std::chrono::steady_clock::now();
+  monopole::LnCScan scan;
+  RationalMap map = monopole::InitialMap(mono.monopoles, target.frame, target.grid, o.guess, &scan);
+  scan_seconds = Since(t1);
+  map.provenance = {{"made_by", "quijibo monopoles"},
+                    {"initializer", "monopoles"},
+                    {"mesh", fs::path(target.source).filename().string()},
+                    {"resolution", target.grid.frame.dims[0]},
+                    {"epsilon", mo.fit.epsilon},
+                    {"fit_target", O::Settings().Find("fit_target", o)->get(o)},
+                    {"candidates", mo.sampling.count},
+                    {"seed", mo.fit.seed},
+                    {"sampling_seed", mo.sampling.seed},
+                    {"amplitude", o.guess.amplitude},
+                    {"relative_residual", mono.fit.final_relative_residual},
+                    {"monopoles", mono.monopoles.size()}};
+  return map;
+}
+
+// A monopole start that cannot be optimized is refused, a doubtful one warned about; any other
+// inverted start is warned about.
+void JudgeStart(const O& o, const monopole::MonopoleResult& mono, const monopole::StartCheck& start) {
+  if (o.kind == "monopoles") {
+    const MonopoleStartVerdict verdict = JudgeMonopoleStart(mono.fit, o.Monopoles().fit.epsilon, mono.candidates, start);
+    if (!verdict.refusal.empty()) throw Error("initial: " + verdict.refusal);
+    if (!verdict.warning.empty()) std::fprintf(stderr, "quijibo: warning: %s\n", verdict.warning.c_str());
+  } else if (start.inverted)
+    std::fprintf(stderr,
+                 "quijibo: warning: the initial map is inverted: L is not lower inside the shape than outside "
+                 "(medians %.3g inside, %.3g outside); the optimizer may not recover\n",
+                 start.median_inside, start.median_outside);
+}
+
+// monopoles.json: the start check and the fit's figures and times.
+json FitSummary(const TargetResult& target, const O& o, const RationalMap& map, const monopole::StartCheck& start,
+                const monopole::KernelFitSummary& kfit, const monopole::MonopoleResult& mono, double scan_seconds,
+                double png_seconds) {
+  json s = {{"mesh", target.source},
+            {"initializer", o.kind},
+            {"triangles", target.mesh.triangles.size()},
+            {"degenerate_dropped", target.read_report.degenerate_dropped},
+            {"top_roots", map.top_count()},
+            {"bottom_roots", map.bottom_count()},
+            {"ln_C", map.ln_C},
+            {"start",
+             {{"median_L_inside", start.median_inside},
+              {"median_L_outside", start.median_outside},
+              {"iou", start.iou},
+              {"saturated_fraction", start.saturated},
+              {"inverted", start.inverted}}}};
+  if (o.kind == "log-kernel") {
+    s["log_kernel"] = {{"rows", kfit.rows},
+                       {"band_rows", kfit.band_rows},
+                       {"far_rows", kfit.far_rows},
+                       {"active_set_iterations", kfit.iterations},
+                       {"refine_rounds", kfit.refine_rounds},
+                       {"top", kfit.top},
+                       {"bottom", kfit.bottom},
+                       {"exponent_sum", kfit.exponent_sum},
+                       {"spacing", kfit.spacing},
+                       {"rms_band", kfit.rms_band},
+                       {"sign_agreement", kfit.sign_agreement}};
+    s["seconds"] = {{"sdf", target.sdf_seconds}, {"fit", kfit.seconds}, {"png", png_seconds}};
+    return s;
+  }
+  s.update(json{{"monopoles", mono.monopoles.size()},
+                {"positive", mono.positive_count()},
+                {"negative", mono.negative_count()},
+                {"relative_residual", mono.fit.final_relative_residual},
+                {"epsilon", o.Monopoles().fit.epsilon},
+                {"fit_stop", monopole::ToString(mono.fit.stop)},
+                {"steps", mono.fit.steps},
+                {"shell_points", mono.shell_points},
+                {"candidates", mono.candidates},
+                {"bem_elements", mono.bem.elements}});
+  s["seconds"] = {{"sdf", target.sdf_seconds},         {"bem", mono.seconds.bem},
+                  {"shell", mono.seconds.shell},       {"potential", mono.seconds.potential},
+                  {"sampling", mono.seconds.sampling}, {"fit", mono.seconds.fit},
+                  {"ln_C_scan", scan_seconds},         {"png", png_seconds}};
+  return s;
+}
+
+}  // namespace
+
 InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
   if (std::string why = o.Validate(); !why.empty()) throw Error("initial: " + why);
   InitialGuessResult res;
@@ -274,68 +425,12 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
     res.map.provenance = {{"made_by", "quijibo run (random initial map)"}, {"seed", o.random.seed}};
     return res;
   }
-  const std::string mesh_name = fs::path(target.source).filename().string();
-  const int resolution = target.grid.frame.dims[0];
   monopole::MonopoleResult mono;
-  monopole::LnCScan scan;
   monopole::KernelFitSummary kfit;
   double scan_seconds = 0;
-  if (o.kind == "log-kernel") {
-    res.map = monopole::KernelFitMap(target.mesh.vertices, target.mesh.triangles, target.grid, target.frame, o.kernel,
-                                     &kfit);
-    res.map.provenance = {{"made_by", "quijibo monopoles"},
-                          {"initializer", "log-kernel"},
-                          {"mesh", mesh_name},
-                          {"resolution", resolution},
-                          {"roots", o.kernel.roots},
-                          {"max_roots", o.kernel.max_roots},
-                          {"root_spacing", o.kernel.spacing},
-                          {"offset_cells", o.kernel.offset_cells},
-                          {"band_cells", o.kernel.band_cells},
-                          {"band_amplitude", o.kernel.amplitude},
-                          {"ridge", o.kernel.ridge},
-                          {"origin_root", o.kernel.origin_root},
-                          {"refine_rounds", o.kernel.refine_rounds},
-                          {"sampling_seed", o.kernel.seed}};
-  } else {
-    const monopole::MonopoleOptions mo = o.Monopoles();
-    Progress progress("monopoles", 1.0, false);
-    mono = monopole::FitMonopoles(target.mesh.vertices, target.mesh.triangles, target.grid, mo,
-                                  [&](const monopole::MonopoleProgress& p) {
-      if (p.stage == "fit")
-        progress.update(std::min(0.99, std::log(p.relative_residual) / std::log(mo.fit.epsilon)),
-                        "step " + std::to_string(p.step) + ", residual " + std::to_string(p.relative_residual));
-      else
-        progress.update(0.0, p.stage + " done");
-    });
-    progress.finish();
-    const auto t1 = std::chrono::steady_clock::now();
-    res.map = monopole::InitialMap(mono.monopoles, target.frame, target.grid, o.guess, &scan);
-    scan_seconds = Since(t1);
-    res.map.provenance = {{"made_by", "quijibo monopoles"},
-                          {"initializer", "monopoles"},
-                          {"mesh", mesh_name},
-                          {"resolution", resolution},
-                          {"epsilon", mo.fit.epsilon},
-                          {"fit_target", O::Settings().Find("fit_target", o)->get(o)},
-                          {"candidates", mo.sampling.count},
-                          {"seed", mo.fit.seed},
-                          {"sampling_seed", mo.sampling.seed},
-                          {"amplitude", o.guess.amplitude},
-                          {"relative_residual", mono.fit.final_relative_residual},
-                          {"monopoles", mono.monopoles.size()}};
-  }
+  res.map = o.kind == "log-kernel" ? FitLogKernel(target, o, kfit) : FitMonopoleMap(target, o, mono, scan_seconds);
   const monopole::StartCheck start = monopole::CheckStart(res.map, target.grid, o.guess.alpha);
-  if (o.kind == "monopoles") {
-    const monopole::MonopoleOptions mo = o.Monopoles();
-    const MonopoleStartVerdict verdict = JudgeMonopoleStart(mono.fit, mo.fit.epsilon, mono.candidates, start);
-    if (!verdict.refusal.empty()) throw Error("initial: " + verdict.refusal);
-    if (!verdict.warning.empty()) std::fprintf(stderr, "quijibo: warning: %s\n", verdict.warning.c_str());
-  } else if (start.inverted)
-    std::fprintf(stderr,
-                 "quijibo: warning: the initial map is inverted: L is not lower inside the shape than outside "
-                 "(medians %.3g inside, %.3g outside); the optimizer may not recover\n",
-                 start.median_inside, start.median_outside);
+  JudgeStart(o, mono, start);
   const auto t2 = std::chrono::steady_clock::now();
   if (o.kind == "log-kernel") {
     res.picture_name = "start.png";
@@ -345,49 +440,7 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
     res.picture = std::make_shared<Image>(PotentialSlice(*mono.potential, target.grid, res.map, o.png_size));
   }
   const double png_seconds = Since(t2);
-  json& s = res.summary;
-  s = {{"mesh", target.source},
-       {"initializer", o.kind},
-       {"triangles", target.mesh.triangles.size()},
-       {"degenerate_dropped", target.read_report.degenerate_dropped},
-       {"top_roots", res.map.top_count()},
-       {"bottom_roots", res.map.bottom_count()},
-       {"ln_C", res.map.ln_C},
-       {"start",
-        {{"median_L_inside", start.median_inside},
-         {"median_L_outside", start.median_outside},
-         {"iou", start.iou},
-         {"saturated_fraction", start.saturated},
-         {"inverted", start.inverted}}}};
-  if (o.kind == "log-kernel") {
-    s["log_kernel"] = {{"rows", kfit.rows},
-                       {"band_rows", kfit.band_rows},
-                       {"far_rows", kfit.far_rows},
-                       {"active_set_iterations", kfit.iterations},
-                       {"refine_rounds", kfit.refine_rounds},
-                       {"top", kfit.top},
-                       {"bottom", kfit.bottom},
-                       {"exponent_sum", kfit.exponent_sum},
-                       {"spacing", kfit.spacing},
-                       {"rms_band", kfit.rms_band},
-                       {"sign_agreement", kfit.sign_agreement}};
-    s["seconds"] = {{"sdf", target.sdf_seconds}, {"fit", kfit.seconds}, {"png", png_seconds}};
-  } else {
-    s.update(json{{"monopoles", mono.monopoles.size()},
-                  {"positive", mono.positive_count()},
-                  {"negative", mono.negative_count()},
-                  {"relative_residual", mono.fit.final_relative_residual},
-                  {"epsilon", o.Monopoles().fit.epsilon},
-                  {"fit_stop", monopole::ToString(mono.fit.stop)},
-                  {"steps", mono.fit.steps},
-                  {"shell_points", mono.shell_points},
-                  {"candidates", mono.candidates},
-                  {"bem_elements", mono.bem.elements}});
-    s["seconds"] = {{"sdf", target.sdf_seconds},         {"bem", mono.seconds.bem},
-                    {"shell", mono.seconds.shell},       {"potential", mono.seconds.potential},
-                    {"sampling", mono.seconds.sampling}, {"fit", mono.seconds.fit},
-                    {"ln_C_scan", scan_seconds},         {"png", png_seconds}};
-  }
+  res.summary = FitSummary(target, o, res.map, start, kfit, mono, scan_seconds, png_seconds);
   return res;
 }
 

@@ -124,7 +124,7 @@ std::string MeshStageOptions::Validate() const {
       return "vdb grids: expected surface, density or field, found " + g;
   if (!(vdb_band >= 1 && vdb_band <= 1000)) return "vdb band: expected a number in [1, 1000]";
   if (!rotation.empty() && rotation.size() != 4) return "rotation: expected ax,ay,az,degrees";
-  return julia.validate();
+  return julia.Validate();
 }
 
 MeshStageOptions MeshStageOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
@@ -159,7 +159,7 @@ MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& 
   m.max_corner = {c[0] + half, c[1] + half, c[2] + half};
   if (o.box.size() == 6)
     for (int a = 0; a < 3; ++a) m.min_corner[a] = o.box[a], m.max_corner[a] = o.box[3 + a];
-  if (auto why = m.validate(); !why.empty()) throw Error("mesh: " + why);
+  if (auto why = m.Validate(); !why.empty()) throw Error("mesh: " + why);
   r.julia = o.TranslatedJulia();
   if (o.rotation.size() == 4) {
     const Vec3 center{(m.min_corner[0] + m.max_corner[0]) / 2, (m.min_corner[1] + m.max_corner[1]) / 2,
@@ -167,7 +167,7 @@ MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& 
     r.julia.placement =
         SampleTransform::AxisAngle({o.rotation[0], o.rotation[1], o.rotation[2]}, o.rotation[3], center);
   }
-  if (auto why = r.julia.validate(); !why.empty()) throw Error(why);
+  if (auto why = r.julia.Validate(); !why.empty()) throw Error(why);
   mesh::JuliaFieldStats stats;
   const mesh::BatchField field = mesh::MakeJuliaField(map, r.julia, o.iso, ParsePrecision(o.precision), &stats,
                                                        ParseJuliaKernel(o.kernel));

@@ -75,11 +75,15 @@ const Schema<ModulusStageOptions>& ModulusStageOptions::Settings() {
           .Number(
               "beta", "--beta", "Offset beta, paper's sign: exp(alpha (phi + beta))",
               [](auto& o) -> double& { return o.shape.beta.value; }, -1e6, 1e6)
+          .Doc("offset beta, the paper's sign: exp(alpha (phi + beta)) (the authors' code's b = 0.02 is beta = −0.02)")
           .Numbers(
               "offset", "--offset", "Origin translation ox oy oz (2023 Fig. 5)",
               [](auto& o) -> std::optional<std::vector<double>>& { return o.offset; }, {3}, -1e6, 1e6)
           .Path("params", "--params", "JSON with alpha/beta fields and origin_offset (overrides --alpha/--beta)",
                 [](auto& o) -> std::optional<std::string>& { return o.params; })
+          .Doc("a `--params` file: alpha/beta as numbers or spatially varying fields, `origin_offset` (its keys "
+               "override `alpha`, `beta` and `offset`; checked by `--check`; it and the mask files it reads join "
+               "the stage's hash)")
           .Integer(
               "sdf_resolution", "--sdf-resolution", "Mesh targets: SDF cells on [-0.5,0.5]^3",
               [](auto& o) -> int& { return o.sdf_resolution; }, 8, 2048);
@@ -92,7 +96,7 @@ std::string ModulusStageOptions::Validate() const {
   if (!versor.poly && versor.generate.max_power < versor.generate.min_power)
     return "versor: max_power: expected a number >= min_power";
   if (std::string why = output.Validate(); !why.empty()) return "output: " + why;
-  return shape.validate();
+  return shape.Validate();
 }
 
 ModulusStageOptions ModulusStageOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
@@ -140,7 +144,7 @@ ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions&
     af.sdf_resolution = o.authors_frame[0];
     if (o.authors_frame.size() > 1) af.nodes = o.authors_frame[1];
     af.unit_scale = lt.unit_per_source;
-    if (auto why = af.validate(); !why.empty()) throw Error("--authors-frame: " + why);
+    if (auto why = af.Validate(); !why.empty()) throw Error("--authors-frame: " + why);
     lt.target = InAuthorsFrame(lt.target, af);
     // alpha, beta (numbers or --params fields) were given as the authors' a and b.
     authors = {{"sdf_resolution", af.sdf_resolution},

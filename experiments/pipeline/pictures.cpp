@@ -58,8 +58,8 @@ SlicePicture SliceAgainstTargetPicture(const RationalMap& map, const ScalarGrid&
   if (target.coordinates != "fractal")
     throw Error(target_path + ": expected a grid in fractal coordinates, found \"" + target.coordinates + "\"");
   mesh::CheckSameFrame(map.frame, "the map", target_path);
-  if (auto why = view.validate(); !why.empty()) throw Error("picture: " + why);
-  if (auto why = julia.validate(); !why.empty()) throw Error(why);
+  if (auto why = view.Validate(); !why.empty()) throw Error("picture: " + why);
+  if (auto why = julia.Validate(); !why.empty()) throw Error(why);
   const mesh::BatchField field = mesh::MakeJuliaField(map, julia, iso, ParsePrecision(precision));
   SlicePicture p;
   p.image = mesh::SliceAgainstTarget(field, target, view, &p.agreement);

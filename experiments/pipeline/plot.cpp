@@ -171,83 +171,75 @@ std::size_t KeyRows(const std::vector<std::string>& titles, std::size_t relative
   return (titles.size() + fit - 1) / fit;
 }
 
-}  // namespace
-
-void Plot(const PlotOptions& o) {
-  std::vector<ConvergenceLog> logs;
-  for (const auto& path : o.logs) logs.push_back(ReadConvergenceLog(path));
-  if (o.labels.size() > logs.size())
-    throw Error("--label: " + std::to_string(o.labels.size()) + " labels for " + std::to_string(logs.size()) + " logs");
-
-  const fs::path prefix(o.out);
-  if (prefix.filename().empty()) throw Error(o.out + ": expected an output prefix such as out/convergence");
-  const std::string png = o.out + ".png", svg = o.out + ".svg";
-
-  TempDir tmp;
-  // The plot command's clauses: relative curves, then absolute ones, then the pass-start key entry, so
-  // that the key (filled column by column, one row per log) reads "relative | absolute | pass start".
+// The curves of the plot: each log's data files in the temporary folder and the plot command's
+// clauses, relative curves, then absolute ones, then the pass-start key entry, so that the key
+// (filled column by column, one row per log) reads "relative | absolute | pass start".
+struct Curves {
   std::vector<std::string> relative_clauses, absolute_clauses, extra_clauses, titles;
-  std::ostringstream marks;
   long long min_step = 0, max_step = 0;
-  bool any_step = false;
-  auto see = [&](long long s) {
+  bool any_step = false, any_relative = false;
+  std::string first_label;
+  void See(long long s) {
     if (!any_step) min_step = max_step = s, any_step = true;
     min_step = std::min(min_step, s), max_step = std::max(max_step, s);
-  };
-  std::string first_label;
-  bool any_relative = false;
-  for (std::size_t i = 0; i < logs.size(); ++i) {
-    const ConvergenceLog& log = logs[i];
-    const std::string label = i < o.labels.size() ? o.labels[i] : DefaultLabel(log);
-    if (i == 0) first_label = label;
-    // Normalized energy (psi + 1) / 2; psi = -1 (or below, by rounding) has no place on a log axis.
-    std::size_t dropped = 0;
-    auto write = [&](std::ostringstream& s, const ConvergenceLog::Point& p) {
-      const double y = (p.energy + 1.0) / 2.0;
-      if (!(y > 0.0)) return ++dropped, false;
-      s << p.step << ' ' << json(y).dump() << '\n';
-      see(p.step);
-      return true;
-    };
-    std::ostringstream rel, abs;
-    bool has_rel = false, has_abs = false;
-    for (const auto& segment : log.relative) {
-      bool any = false;
-      for (const auto& p : segment) any |= write(rel, p);
-      if (any) rel << '\n';  // a blank line: no line joins two passes (different grids)
-      has_rel |= any;
-    }
-    for (const auto& p : log.absolute) has_abs |= write(abs, p);
-    if (dropped)
-      std::fprintf(stderr, "quijibo: warning: %s: %zu energies at psi <= -1 left out of the log axis\n",
-                   log.path.c_str(), dropped);
-    if (!has_rel && !has_abs)
-      throw Error(log.path + ": no energies to plot (no \"iteration\", \"absolute\" or pass-end lines)");
-    any_relative |= has_rel;
-    const std::string color = kColors[i % std::size(kColors)];
-    const std::string abs_color = logs.size() == 1 ? kColors[1] : color;
-    if (has_rel) {
-      const std::string file = tmp / ("relative" + std::to_string(i) + ".dat");
-      WriteFileAtomically(file, rel.str());
-      titles.push_back(label + " relative");
-      relative_clauses.push_back(Quote(file) + " using 1:2 with lines lw 2 lc rgb '" + color + "' title " +
-                                 Quote(titles.back()));
-    }
-    if (has_abs) {
-      const std::string file = tmp / ("absolute" + std::to_string(i) + ".dat");
-      WriteFileAtomically(file, abs.str());
-      titles.push_back(label + " absolute");
-      absolute_clauses.push_back(Quote(file) + " using 1:2 with linespoints dt 2 lw 1.5 pt 7 ps 0.8 lc rgb '" +
-                                 abs_color + "' title " + Quote(titles.back()));
-    }
   }
+};
 
-  // Pass starts of the first log only: the logs of a comparison usually share a schedule, and
-  // several sets of labelled lines would bury the curves.
+// Log i's curves: the normalized energy (psi + 1) / 2 of its relative segments and absolute
+// energies, written to data files in `tmp`. psi = -1 (or below, by rounding) has no place on a
+// log axis and is left out with a warning.
+void AddLogCurves(const ConvergenceLog& log, std::size_t i, std::size_t log_count, const std::string& label,
+                  const TempDir& tmp, Curves& curves) {
+  std::size_t dropped = 0;
+  auto write = [&](std::ostringstream& s, const ConvergenceLog::Point& p) {
+    const double y = (p.energy + 1.0) / 2.0;
+    if (!(y > 0.0)) return ++dropped, false;
+    s << p.step << ' ' << json(y).dump() << '\n';
+    curves.See(p.step);
+    return true;
+  };
+  std::ostringstream rel, abs;
+  bool has_rel = false, has_abs = false;
+  for (const auto& segment : log.relative) {
+    bool any = false;
+    for (const auto& p : segment) any |= write(rel, p);
+    if (any) rel << '\n';  // a blank line: no line joins two passes (different grids)
+    has_rel |= any;
+  }
+  for (const auto& p : log.absolute) has_abs |= write(abs, p);
+  if (dropped)
+    std::fprintf(stderr, "quijibo: warning: %s: %zu energies at psi <= -1 left out of the log axis\n",
+                 log.path.c_str(), dropped);
+  if (!has_rel && !has_abs)
+    throw Error(log.path + ": no energies to plot (no \"iteration\", \"absolute\" or pass-end lines)");
+  curves.any_relative |= has_rel;
+  const std::string color = kColors[i % std::size(kColors)];
+  const std::string abs_color = log_count == 1 ? kColors[1] : color;
+  if (has_rel) {
+    const std::string file = tmp / ("relative" + std::to_string(i) + ".dat");
+    WriteFileAtomically(file, rel.str());
+    curves.titles.push_back(label + " relative");
+    curves.relative_clauses.push_back(Quote(file) + " using 1:2 with lines lw 2 lc rgb '" + color + "' title " +
+                                      Quote(curves.titles.back()));
+  }
+  if (has_abs) {
+    const std::string file = tmp / ("absolute" + std::to_string(i) + ".dat");
+    WriteFileAtomically(file, abs.str());
+    curves.titles.push_back(label + " absolute");
+    curves.absolute_clauses.push_back(Quote(file) + " using 1:2 with linespoints dt 2 lw 1.5 pt 7 ps 0.8 lc rgb '" +
+                                      abs_color + "' title " + Quote(curves.titles.back()));
+  }
+}
+
+// The pass starts of the first log as dashed lines with labels (gnuplot commands), and their key
+// entry: the logs of a comparison usually share a schedule, and several sets of labelled lines
+// would bury the curves.
+std::string PassMarks(const std::vector<ConvergenceLog>& logs, Curves& curves) {
+  std::ostringstream marks;
   const auto& passes = logs.front().passes;
-  for (const auto& m : passes) see(m.step);
+  for (const auto& m : passes) curves.See(m.step);
   if (!passes.empty()) {
-    const double span = std::max<double>(1.0, double(max_step - min_step));
+    const double span = std::max<double>(1.0, double(curves.max_step - curves.min_step));
     long long previous = 0;
     int row = 0;
     for (std::size_t k = 0; k < passes.size(); ++k) {
@@ -261,35 +253,37 @@ void Plot(const PlotOptions& o) {
         marks << "set label " << Quote(m.label) << " at first " << m.step << ", graph " << 0.975 - 0.04 * row
               << " left offset character 0.4, 0 font ',9' tc rgb '#404040' front\n";
     }
-    titles.push_back(logs.size() == 1 ? "pass start" : "pass start (" + first_label + ")");
-    extra_clauses.push_back("NaN with lines dt 2 lw 1 lc rgb '#808080' title " + Quote(titles.back()));
+    curves.titles.push_back(logs.size() == 1 ? "pass start" : "pass start (" + curves.first_label + ")");
+    curves.extra_clauses.push_back("NaN with lines dt 2 lw 1 lc rgb '#808080' title " + Quote(curves.titles.back()));
   }
-
   // Passes that made no iteration leave only the absolute energies at the start and the pass ends.
-  if (!any_relative)
+  if (!curves.any_relative)
     marks << "set label 'no iterations: the absolute energy at the start and at pass ends only' at graph 0.5, "
              "graph 0.5 center font ',11' tc rgb '#404040' front\n";
+  return marks.str();
+}
 
-  std::string title = o.title;
-  if (title.empty()) {
-    title = "QUIJIBO convergence";
-    if (logs.size() == 1) {
-      title += ": " + first_label;
-      const std::string d = Describe(logs.front().run);
-      if (!d.empty()) title += " (" + d + ")";
-    }
+// The title: the option, else "QUIJIBO convergence" with a single log's label and settings.
+std::string PlotTitle(const PlotOptions& o, const std::vector<ConvergenceLog>& logs, const std::string& first_label) {
+  if (!o.title.empty()) return o.title;
+  std::string title = "QUIJIBO convergence";
+  if (logs.size() == 1) {
+    title += ": " + first_label;
+    const std::string d = Describe(logs.front().run);
+    if (!d.empty()) title += " (" + d + ")";
   }
+  return title;
+}
 
-  const std::size_t rows = KeyRows(titles, relative_clauses.size(), absolute_clauses.size(), o.width);
+// The gnuplot script: PNG (pngcairo when there is one) to png_tmp, then SVG to svg_tmp.
+std::string GnuplotScript(const PlotOptions& o, const Curves& curves, const std::string& marks,
+                          const std::string& title, const std::string& png_tmp, const std::string& svg_tmp) {
+  const std::size_t rows =
+      KeyRows(curves.titles, curves.relative_clauses.size(), curves.absolute_clauses.size(), o.width);
   std::string clauses;
-  for (const auto* list : {&relative_clauses, &absolute_clauses, &extra_clauses})
+  for (const auto* list : {&curves.relative_clauses, &curves.absolute_clauses, &curves.extra_clauses})
     for (const auto& c : *list) clauses += (clauses.empty() ? "" : ", \\\n     ") + c;
-
-  // Every log read and checked: the output folder may now be created.
-  CreateParentFolder(png);
-  Scratch scratch;
-  const std::string suffix = ".tmp." + std::to_string(::getpid());
-  const std::string png_tmp = scratch.add(png + suffix), svg_tmp = scratch.add(svg + suffix);
+  const long long min_step = curves.min_step, max_step = curves.max_step;
   const std::string size = std::to_string(o.width) + "," + std::to_string(o.height);
   std::ostringstream gp;
   gp << "# quijibo plot\n"
@@ -320,13 +314,43 @@ void Plot(const PlotOptions& o) {
      << "set bmargin " << 5.5 + 1.3 * double(rows) << "\n"
      << "set key vertical maxrows " << rows
      << " Left reverse center bottom at screen 0.5, screen 0.02 box opaque spacing 1.2 width 1\n"
-     << marks.str() << "plot " << clauses << "\n"
+     << marks << "plot " << clauses << "\n"
      << "set terminal svg size " << size << " noenhanced font 'sans,11' background '#ffffff'\n"
      << "set output " << Quote(svg_tmp) << "\n"
      << "replot\n"
         "unset output\n";
+  return gp.str();
+}
+
+}  // namespace
+
+void Plot(const PlotOptions& o) {
+  std::vector<ConvergenceLog> logs;
+  for (const auto& path : o.logs) logs.push_back(ReadConvergenceLog(path));
+  if (o.labels.size() > logs.size())
+    throw Error("--label: " + std::to_string(o.labels.size()) + " labels for " + std::to_string(logs.size()) + " logs");
+
+  const fs::path prefix(o.out);
+  if (prefix.filename().empty()) throw Error(o.out + ": expected an output prefix such as out/convergence");
+  const std::string png = o.out + ".png", svg = o.out + ".svg";
+
+  TempDir tmp;
+  Curves curves;
+  for (std::size_t i = 0; i < logs.size(); ++i) {
+    const std::string label = i < o.labels.size() ? o.labels[i] : DefaultLabel(logs[i]);
+    if (i == 0) curves.first_label = label;
+    AddLogCurves(logs[i], i, logs.size(), label, tmp, curves);
+  }
+  const std::string marks = PassMarks(logs, curves);
+  const std::string title = PlotTitle(o, logs, curves.first_label);
+
+  // Every log read and checked: the output folder may now be created.
+  CreateParentFolder(png);
+  Scratch scratch;
+  const std::string suffix = ".tmp." + std::to_string(::getpid());
+  const std::string png_tmp = scratch.add(png + suffix), svg_tmp = scratch.add(svg + suffix);
   const std::string script = tmp / "plot.gp";
-  WriteFileAtomically(script, gp.str());
+  WriteFileAtomically(script, GnuplotScript(o, curves, marks, title, png_tmp, svg_tmp));
   RunGnuplot(script, tmp / "gnuplot.err");
   for (const auto& [from, to] : {std::pair{png_tmp, png}, std::pair{svg_tmp, svg}}) {
     std::error_code ec;

@@ -17,6 +17,10 @@ namespace quijibo::pipeline {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
+double Since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 double WallSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -77,7 +81,7 @@ json ProductOutputOptions::ToJson() const {
 
 Product Produce(std::shared_ptr<const QuaternionMap> map, const ProductOutputOptions& o, const IterationOptions& jo,
                 const ModulusTarget& target, bool two_d) {
-  if (auto why = jo.validate(); !why.empty()) throw Error(why);
+  if (auto why = jo.Validate(); !why.empty()) throw Error(why);
   if (auto why = o.Validate(); !why.empty()) throw Error("output: " + why);
   const std::vector<double> box = o.box.value_or(std::vector<double>{});
   Product p;
@@ -97,7 +101,7 @@ Product Produce(std::shared_ptr<const QuaternionMap> map, const ProductOutputOpt
       v.x_min = cx - half, v.x_max = cx + half, v.y_min = cy - half, v.y_max = cy + half;
     }
     v.height = v.width;
-    if (auto why = v.validate(); !why.empty()) throw Error(why);
+    if (auto why = v.Validate(); !why.empty()) throw Error(why);
     const std::vector<double> field = SampleField2D(*map, jo, v);
     std::int64_t inside = 0;
     for (double f : field) inside += f < 0;
@@ -116,7 +120,7 @@ Product Produce(std::shared_ptr<const QuaternionMap> map, const ProductOutputOpt
         mo.max_corner[a] = target.box_max[a] + 0.15 * longest;
       }
     }
-    if (auto why = mo.validate(); !why.empty()) throw Error("meshing: " + why);
+    if (auto why = mo.Validate(); !why.empty()) throw Error("meshing: " + why);
     mesh::MeshingSummary ms;
     p.mesh = mesh::MeshField(mesh::MakeQuaternionMapField(map, jo, 1.0), mo, &ms);
     p.kind = "ply";

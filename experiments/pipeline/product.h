@@ -2,6 +2,7 @@
 // complex plane (PNG) or meshed in 3D (PLY through the shared mesher), over a box in the unit frame.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -70,5 +71,7 @@ class Outputs {
 // Wall and CPU (user + system, this process) clocks, in seconds.
 double WallSeconds();
 double CpuSeconds();
+// Wall seconds since t0 (steady clock).
+double Since(std::chrono::steady_clock::time_point t0);
 
 }  // namespace quijibo::pipeline

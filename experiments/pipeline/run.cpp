@@ -206,6 +206,12 @@ class Runner {
   std::string P(const std::string& rel) const { return cache_.Path(rel); }
   // The render of a modulus or portal mesh.
   void RenderStage(const std::string& mesh, const std::string& upstream);
+  // The QUIJIBO method's stages (Quijibo); each returns its stage hash.
+  std::string InitialStage();
+  std::vector<std::string> OptimizeStages(const std::string& initial_hash);
+  void PlotStage(const std::vector<std::string>& opt_hashes);
+  std::string MeshStage(const std::string& chosen_hash, const std::string& map_path);
+  void FidelityStage(const std::string& initial_hash, const std::string& chosen_hash, const std::string& map_path);
 
   const Experiment& e_;
   bool quiet_;
@@ -269,8 +275,6 @@ class SignalWatcher {
 };
 
 void Runner::Quijibo() {
-  const TargetOptions& t = *e_.target;
-  const InitialGuessStageOptions& in = e_.initial;
   const bool plot = e_.outputs.plot;
   total_ = 2 + int(e_.optimizers.size()) + (plot ? 1 : 0) + (e_.mesh.enabled ? 1 : 0) + (e_.pictures.enabled ? 1 : 0);
   downstream_["initial"] = {"plot", "mesh", "pictures", "fidelity"};
@@ -283,7 +287,28 @@ void Runner::Quijibo() {
   }
   downstream_["mesh"] = {"pictures"};
 
-  // 1. initial: the target grid and the initial map.
+  const std::string initial_hash = InitialStage();
+  const std::vector<std::string> opt_hashes = OptimizeStages(initial_hash);
+  if (plot) PlotStage(opt_hashes);
+  const OptimizeStageOptions& chosen = e_.chosen_optimizer();
+  const std::string chosen_hash = opt_hashes[std::size_t(&chosen - e_.optimizers.data())];
+  const std::string map_path = P(chosen.name + "/map.json");
+  const std::string mesh_hash = e_.mesh.enabled ? MeshStage(chosen_hash, map_path) : std::string();
+  // The optimized set against the target, and the mesh rendered.
+  if (e_.pictures.enabled)
+    cache_.Run("pictures", "pictures", e_.pictures.ToJson(), {}, {initial_hash, chosen_hash, mesh_hash},
+               [&](const std::string& dir) {
+                 const bool has_mesh = !mesh_hash.empty() && fs::exists(P("mesh/julia.ply"));
+                 Pictures(e_.pictures, ReadMap(P("initial/map.json")), ReadMap(map_path), P("initial/target.qgrid"),
+                          has_mesh ? P("mesh/julia.ply") : "", dir);
+               });
+  FidelityStage(initial_hash, chosen_hash, map_path);
+}
+
+// The target grid and the initial map.
+std::string Runner::InitialStage() {
+  const TargetOptions& t = *e_.target;
+  const InitialGuessStageOptions& in = e_.initial;
   std::vector<std::string> files;
   if (!t.mesh.empty()) files.push_back(t.mesh);
   if (!t.qgrid.empty()) {
@@ -292,16 +317,17 @@ void Runner::Quijibo() {
   }
   if (in.kind == "map") files.push_back(in.map);
   const json initial_inputs = {{"target", t.ToJson()}, {"initial", in.ToJson()}};
-  const std::string initial_hash =
-      cache_.Run("initial", "initial", initial_inputs, files, {}, [&](const std::string& dir) {
-        const TargetResult target = Target(t);
-        const InitialGuessResult guess = InitialGuess(target, in);
-        WriteTarget(target, t, dir);
-        WriteInitialGuess(guess, dir);
-        if (!guess.summary.is_null()) WriteFileAtomically(dir + "/monopoles.out", guess.summary.dump(1) + "\n");
-      });
+  return cache_.Run("initial", "initial", initial_inputs, files, {}, [&](const std::string& dir) {
+    const TargetResult target = Target(t);
+    const InitialGuessResult guess = InitialGuess(target, in);
+    WriteTarget(target, t, dir);
+    WriteInitialGuess(guess, dir);
+    if (!guess.summary.is_null()) WriteFileAtomically(dir + "/monopoles.out", guess.summary.dump(1) + "\n");
+  });
+}
 
-  // 2. optimize, once per optimizer entry, in place (its checkpoint survives a kill).
+// The optimization, once per optimizer entry, in place (its checkpoint survives a kill).
+std::vector<std::string> Runner::OptimizeStages(const std::string& initial_hash) {
   std::vector<std::string> opt_hashes;
   for (const OptimizeStageOptions& o : e_.optimizers) {
     const std::string title = "optimize (" + o.name + ", schedule " + o.optimizer.schedule.notation() + ")";
@@ -314,68 +340,60 @@ void Runner::Quijibo() {
                                              if (!quiet_) std::fprintf(stderr, "%s", r.summary.Report().c_str());
                                            }));
   }
+  return opt_hashes;
+}
 
-  // 3. convergence plot
-  if (plot) {
-    PlotOptions po;
-    for (const OptimizeStageOptions& o : e_.optimizers) {
-      po.logs.push_back(P(o.name + "/log.jsonl"));
-      po.labels.push_back(o.name + " (" + o.ToJson()["evaluator"].get<std::string>() + ", " +
-                          o.ToJson()["precision"].get<std::string>() + ")");
-    }
-    cache_.Run("plot", "plot", {{"labels", po.labels}}, po.logs, opt_hashes, [&](const std::string& dir) {
-      // Nothing to draw is a result of the optimization, not a failure of the run.
-      const auto drawable = [](const std::string& l) { return HasEnergies(ReadConvergenceLog(l)); };
-      if (std::none_of(po.logs.begin(), po.logs.end(), drawable)) {
-        WriteFileAtomically(dir + "/no-plot.txt", "no plot: no iterations and no absolute energies in the logs\n");
-        if (!quiet_) std::fprintf(stderr, "quijibo:       no plot: no iterations\n");
-        return;
-      }
-      PlotOptions p = po;
-      p.out = dir + "/convergence";
-      if (e_.optimizers.size() == 1) p.labels.clear();
-      Plot(p);
-    });
+// The convergence plot of every optimizer's log.
+void Runner::PlotStage(const std::vector<std::string>& opt_hashes) {
+  PlotOptions po;
+  for (const OptimizeStageOptions& o : e_.optimizers) {
+    po.logs.push_back(P(o.name + "/log.jsonl"));
+    po.labels.push_back(o.name + " (" + o.ToJson()["evaluator"].get<std::string>() + ", " +
+                        o.ToJson()["precision"].get<std::string>() + ")");
   }
+  cache_.Run("plot", "plot", {{"labels", po.labels}}, po.logs, opt_hashes, [&](const std::string& dir) {
+    // Nothing to draw is a result of the optimization, not a failure of the run.
+    const auto drawable = [](const std::string& l) { return HasEnergies(ReadConvergenceLog(l)); };
+    if (std::none_of(po.logs.begin(), po.logs.end(), drawable)) {
+      WriteFileAtomically(dir + "/no-plot.txt", "no plot: no iterations and no absolute energies in the logs\n");
+      if (!quiet_) std::fprintf(stderr, "quijibo:       no plot: no iterations\n");
+      return;
+    }
+    PlotOptions p = po;
+    p.out = dir + "/convergence";
+    if (e_.optimizers.size() == 1) p.labels.clear();
+    Plot(p);
+  });
+}
 
-  // 4. mesh
-  const OptimizeStageOptions& chosen = e_.chosen_optimizer();
-  const std::string chosen_hash = opt_hashes[std::size_t(&chosen - e_.optimizers.data())];
-  const std::string map_path = P(chosen.name + "/map.json");
-  std::string mesh_hash;
-  if (e_.mesh.enabled)
-    mesh_hash = cache_.Run("mesh", "mesh", e_.mesh.ToJson(), {}, {chosen_hash}, [&](const std::string& dir) {
-      MeshStageOptions mo = e_.mesh;
-      mo.meshing.show_progress = true;
-      const MeshFiles f{dir + "/julia.ply", mo.obj ? dir + "/julia.obj" : "", mo.vdb ? dir + "/julia.vdb" : ""};
-      const RationalMap map = ReadMap(map_path);
-      const MeshStageResult r = MeshJulia(map, mo);
-      // A set without surface in the box is a result: the summary says 0 triangles, the report why.
-      if (r.empty() && !quiet_)
-        std::fprintf(stderr, "quijibo: the surface does not cross the box (no triangles): no mesh written\n");
-      WriteMeshFiles(r, mo, f);
-      json summary = MeshSummary(r, mo, map_path, f);
-      // How much fractal detail the set has, against the target mesh (mesh/fidelity.h).
-      const TargetOptions& t = *e_.target;
-      if (!r.empty() && !t.mesh.empty() && mo.frame == "user") {
-        const mesh::TriangleMesh shape = mesh::ReadMesh(t.mesh);
-        summary["detail"] = mesh::MeasureMeshDetail(r.mesh, &shape, (1.0 - 2.0 * map.frame.padding) / map.frame.scale).ToJson();
-      }
-      WriteFileAtomically(dir + "/summary.json", summary.dump(2) + "\n");
-    });
+// The chosen optimizer's map meshed, with its detail against the target mesh.
+std::string Runner::MeshStage(const std::string& chosen_hash, const std::string& map_path) {
+  return cache_.Run("mesh", "mesh", e_.mesh.ToJson(), {}, {chosen_hash}, [&](const std::string& dir) {
+    MeshStageOptions mo = e_.mesh;
+    mo.meshing.show_progress = true;
+    const MeshFiles f{dir + "/julia.ply", mo.obj ? dir + "/julia.obj" : "", mo.vdb ? dir + "/julia.vdb" : ""};
+    const RationalMap map = ReadMap(map_path);
+    const MeshStageResult r = MeshJulia(map, mo);
+    // A set without surface in the box is a result: the summary says 0 triangles, the report why.
+    if (r.empty() && !quiet_)
+      std::fprintf(stderr, "quijibo: the surface does not cross the box (no triangles): no mesh written\n");
+    WriteMeshFiles(r, mo, f);
+    json summary = MeshSummary(r, mo, map_path, f);
+    // How much fractal detail the set has, against the target mesh (mesh/fidelity.h).
+    const TargetOptions& t = *e_.target;
+    if (!r.empty() && !t.mesh.empty() && mo.frame == "user") {
+      const mesh::TriangleMesh shape = mesh::ReadMesh(t.mesh);
+      summary["detail"] = mesh::MeasureMeshDetail(r.mesh, &shape, (1.0 - 2.0 * map.frame.padding) / map.frame.scale).ToJson();
+    }
+    WriteFileAtomically(dir + "/summary.json", summary.dump(2) + "\n");
+  });
+}
 
-  // 5. pictures: the optimized set against the target, and the mesh rendered.
-  if (e_.pictures.enabled)
-    cache_.Run("pictures", "pictures", e_.pictures.ToJson(), {}, {initial_hash, chosen_hash, mesh_hash},
-               [&](const std::string& dir) {
-                 const bool has_mesh = !mesh_hash.empty() && fs::exists(P("mesh/julia.ply"));
-                 Pictures(e_.pictures, ReadMap(P("initial/map.json")), ReadMap(map_path), P("initial/target.qgrid"),
-                          has_mesh ? P("mesh/julia.ply") : "", dir);
-               });
-
-  // 6. fidelity: the figures and the start check behind report.md's Quality section (quality.h),
-  // at the n and iso of the mesh.
-  const double alpha = chosen.optimizer.energy.alpha;
+// The figures and the start check behind report.md's Quality section (quality.h), at the n and
+// iso of the mesh.
+void Runner::FidelityStage(const std::string& initial_hash, const std::string& chosen_hash,
+                           const std::string& map_path) {
+  const double alpha = e_.chosen_optimizer().optimizer.energy.alpha;
   // The set the mesh shows, without its placement and root transforms (they move it off the target).
   JuliaOptions set;
   set.iterations = e_.mesh.julia.iterations;

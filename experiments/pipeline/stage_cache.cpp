@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "experiments/pipeline/product.h"
 #include "quijibo/hash.h"
 #include "quijibo/io.h"
 
@@ -11,14 +12,6 @@ namespace quijibo::pipeline {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
-
-namespace {
-
-double Since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
 
 std::string StageHash(const std::string& stage, const json& inputs, const std::vector<std::string>& files,
                       const std::vector<std::string>& upstream) {
@@ -55,18 +48,21 @@ StageCache::StageCache(std::string results, bool resume, std::function<void(cons
       done_(std::move(done)),
       computing_(std::move(computing)) {}
 
+bool StageCache::Reuse(const std::string& name, const std::string& hash, const std::string& dir) {
+  const json old = ReadStageFile(dir + "/stage.json");
+  if (!old.is_object() || old.value("hash", "") != hash || !old.value("complete", false)) return false;
+  records_.push_back({name, "reused", hash, old.value("seconds", 0.0)});
+  done_(records_.back());
+  return true;
+}
+
 std::string StageCache::Run(const std::string& name, const std::string& folder, const json& inputs,
                             const std::vector<std::string>& files, const std::vector<std::string>& upstream,
                             const std::function<void(const std::string&)>& compute) {
   announce_(name);
   const std::string hash = StageHash(name, inputs, files, upstream);
   const std::string dir = Path(folder);
-  const json old = ReadStageFile(dir + "/stage.json");
-  if (old.is_object() && old.value("hash", "") == hash && old.value("complete", false)) {
-    records_.push_back({name, "reused", hash, old.value("seconds", 0.0)});
-    done_(records_.back());
-    return hash;
-  }
+  if (Reuse(name, hash, dir)) return hash;
   const std::string partial = dir + ".partial";
   fs::remove_all(partial);
   fs::create_directories(partial);
@@ -97,12 +93,7 @@ std::string StageCache::RunInPlace(const std::string& stage, const std::string& 
   announce_(title);
   const std::string hash = StageHash(stage, inputs, {}, upstream);
   const std::string dir = Path(folder);
-  const json old = ReadStageFile(dir + "/stage.json");
-  if (old.is_object() && old.value("hash", "") == hash && old.value("complete", false)) {
-    records_.push_back({name, "reused", hash, old.value("seconds", 0.0)});
-    done_(records_.back());
-    return hash;
-  }
+  if (Reuse(name, hash, dir)) return hash;
   const json pending = ReadStageFile(dir + "/stage.pending.json");
   std::error_code ec;
   const bool can_resume = resume_ && pending.is_object() && pending.value("hash", "") == hash &&

@@ -49,6 +49,8 @@ class StageCache {
   std::string Path(const std::string& relative) const { return results_ + "/" + relative; }
 
  private:
+  // A complete stage.json of `hash` in `dir`: the stage is recorded as reused.
+  bool Reuse(const std::string& name, const std::string& hash, const std::string& dir);
   std::string results_;
   bool resume_;
   std::function<void(const std::string&)> announce_, note_;

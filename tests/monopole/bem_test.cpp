@@ -140,7 +140,7 @@ TEST(Bem, BadOptionsAndMeshesAreRejected) {
   }
   opt = {};
   opt.far_factor = 0.5;
-  EXPECT_NE(opt.validate().find("bem.far_factor"), std::string::npos);
+  EXPECT_NE(opt.Validate().find("bem.far_factor"), std::string::npos);
   EXPECT_THROW(SolveExteriorPotential(mesh.vertices, {}, {}), Error);
   auto bad = mesh.triangles;
   bad[3][1] = 99;

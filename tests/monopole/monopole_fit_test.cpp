@@ -194,15 +194,15 @@ TEST(Monopole, BadOptionsAreRejected) {
   }
   opt = {};
   opt.batch_size = 0;
-  EXPECT_NE(opt.validate().find("fit.batch_size"), std::string::npos);
+  EXPECT_NE(opt.Validate().find("fit.batch_size"), std::string::npos);
   std::vector<double> short_targets(3, 1.0);
   EXPECT_THROW(GreedyMonopoleFit(p.points, short_targets, p.candidates, {}), Error);
   MonopoleOptions mo;
   mo.shell.offset_cells = -1;
-  EXPECT_NE(mo.validate().find("shell.offset_cells"), std::string::npos);
+  EXPECT_NE(mo.Validate().find("shell.offset_cells"), std::string::npos);
   mo = {};
   mo.bem.max_elements = 0;
-  EXPECT_NE(mo.validate().find("bem.max_elements"), std::string::npos);
+  EXPECT_NE(mo.Validate().find("bem.max_elements"), std::string::npos);
 }
 
 TEST(Monopole, ZeroTargetGivesNoMonopoles) {

@@ -73,7 +73,7 @@ TEST(Sampling, BadOptionsAreRejected) {
   }
   opt = {};
   opt.oversampling = 0.5;
-  EXPECT_NE(opt.validate().find("sampling.oversampling"), std::string::npos);
+  EXPECT_NE(opt.Validate().find("sampling.oversampling"), std::string::npos);
   EXPECT_THROW(PoissonDiskSample(mesh.vertices, {}, {}), Error);
 }
 
