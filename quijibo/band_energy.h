@@ -134,7 +134,8 @@ class BandEnergy {
   // time) or, with blocks in full mode, over the blocks and the cells of the unproven ones.
   Evaluation<double> Sweep(const Eigen::VectorXd& x, bool variable, bool with_gradient);
   // keep_rows: the dense evaluator keeps the rows the sweep evaluates (CacheRows), beside the
-  // anchor's; EvaluateOnce does not, so that isolated evaluations cost no memory.
+  // anchor's. EvaluateOnce keeps only this sweep's, within an eighth of the memory budget, and
+  // only where no anchoring band keeps the evaluator's rows (a pass at the finest level).
   Evaluation<double> BlockSweep(const Eigen::VectorXd& x, bool with_gradient, bool keep_rows);
   // Proves blocks saturated at x: sign (0: not proven) and radius r_B of each; returns the largest
   // N_B of the saturated blocks.
