@@ -116,8 +116,10 @@ class BandEnergy {
   // psi and its gradient, equal to dense->Evaluate(x, mode, with_gradient).
   Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode = EnergyMode::kFull,
                               bool with_gradient = true);
-  // One evaluation that leaves the band as it was (no anchor, no cached rows): over the blocks
-  // where there are blocks, else dense. For isolated points, such as the absolute energy's.
+  // One evaluation that leaves the band as it was (no anchor): over the blocks where there are
+  // blocks, else dense. For isolated points, such as the absolute energy's. Unless another band
+  // keeps the dense evaluator's rows, it keeps the rows it evaluated (within an eighth of the
+  // memory budget): the next isolated point evaluates much the same cells.
   Evaluation<double> EvaluateOnce(const Eigen::VectorXd& x, bool with_gradient = false);
   // The next evaluation anchors (a dense sweep), e.g. at the start of a pass.
   void Invalidate() { anchored_ = false; }
