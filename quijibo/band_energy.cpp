@@ -301,10 +301,18 @@ Evaluation<double> BandEnergy::BlockSweep(const Eigen::VectorXd& x, bool with_gr
   stats_.sweep_cells += std::int64_t(pending_exact_.size()) + 2 * nb;
 
   if (keep_rows) {
-    // The anchor's rows and this sweep's: the next sweeps evaluate much the same cells.
+    // The anchor's rows (its band, list and unproven blocks) and this sweep's: the next sweeps
+    // evaluate much the same cells, and a sweep that does not anchor (a line search's far trial)
+    // must not push out the rows the evaluations around the anchor read.
     std::vector<std::int64_t> rows = row_order_;
+    if (anchor_blocked_) rows.insert(rows.end(), exact_.begin(), exact_.end());
     rows.insert(rows.end(), pending_exact_.begin(), pending_exact_.end());
-    dense_->CacheRows(rows);
+    dense_->CacheRows(rows, this);
+  } else if (dense_->row_owner() == nullptr || dense_->row_owner() == this) {
+    // An isolated evaluation (the absolute energy at the coarse levels, every few dozen
+    // iterations) evaluates nearly the same cells as the last one: keep them, within an eighth of
+    // the budget, unless a band that anchors keeps this evaluator's rows.
+    dense_->CacheRows(pending_exact_, this, dense_->memory_budget_bytes() / 8);
   }
   row_norm_.resize(std::size_t(m));
   const std::vector<std::int64_t> offsets = Group(pending_exact_);
@@ -467,7 +475,7 @@ void BandEnergy::KeepRows() {
   }
   std::vector<std::int64_t> rows = row_order_;
   rows.insert(rows.end(), exact_.begin(), exact_.end());
-  dense_->CacheRows(rows);
+  dense_->CacheRows(rows, this);
 }
 
 void BandEnergy::UpdateConstants() {

@@ -116,8 +116,10 @@ class BandEnergy {
   // psi and its gradient, equal to dense->Evaluate(x, mode, with_gradient).
   Evaluation<double> Evaluate(const Eigen::VectorXd& x, EnergyMode mode = EnergyMode::kFull,
                               bool with_gradient = true);
-  // One evaluation that leaves the band as it was (no anchor, no cached rows): over the blocks
-  // where there are blocks, else dense. For isolated points, such as the absolute energy's.
+  // One evaluation that leaves the band as it was (no anchor): over the blocks where there are
+  // blocks, else dense. For isolated points, such as the absolute energy's. Unless another band
+  // keeps the dense evaluator's rows, it keeps the rows it evaluated (within an eighth of the
+  // memory budget): the next isolated point evaluates much the same cells.
   Evaluation<double> EvaluateOnce(const Eigen::VectorXd& x, bool with_gradient = false);
   // The next evaluation anchors (a dense sweep), e.g. at the start of a pass.
   void Invalidate() { anchored_ = false; }
@@ -134,7 +136,8 @@ class BandEnergy {
   // time) or, with blocks in full mode, over the blocks and the cells of the unproven ones.
   Evaluation<double> Sweep(const Eigen::VectorXd& x, bool variable, bool with_gradient);
   // keep_rows: the dense evaluator keeps the rows the sweep evaluates (CacheRows), beside the
-  // anchor's; EvaluateOnce does not, so that isolated evaluations cost no memory.
+  // anchor's. EvaluateOnce keeps only this sweep's, within an eighth of the memory budget, and
+  // only where no anchoring band keeps the evaluator's rows (a pass at the finest level).
   Evaluation<double> BlockSweep(const Eigen::VectorXd& x, bool with_gradient, bool keep_rows);
   // Proves blocks saturated at x: sign (0: not proven) and radius r_B of each; returns the largest
   // N_B of the saturated blocks.

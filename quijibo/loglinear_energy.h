@@ -22,6 +22,7 @@
 //             band, kDouble only up to an eighth of the budget (docs/benchmarks.md §8 "Memory")
 #pragma once
 
+#include <limits>
 #include <memory>
 
 #include "quijibo/energy.h"
@@ -92,8 +93,15 @@ class LogLinearEnergy {
   // Rows that `actives` does not list are dropped once they would make up a quarter of the cache,
   // so that it follows the band rather than accumulating. At most half the memory budget: beyond
   // it, as many of `actives`, from the first, as fit (so list them most used first). Other
-  // storages: nothing. Not to be called while RowOf runs.
-  void CacheRows(const std::vector<std::int64_t>& actives) const;
+  // storages: nothing. Not to be called while RowOf runs. `owner` (a band) is remembered, so that
+  // a band over a shared evaluator can leave another band's rows alone; max_bytes caps the cache
+  // below its budget for this request.
+  void CacheRows(const std::vector<std::int64_t>& actives, const void* owner = nullptr,
+                 double max_bytes = std::numeric_limits<double>::infinity()) const;
+  // Who last called CacheRows (null: nobody).
+  const void* row_owner() const { return row_owner_; }
+  // The memory budget the evaluator was given (LogLinearOptions::memory_budget_bytes).
+  double memory_budget_bytes() const { return memory_budget_bytes_; }
   std::size_t cached_row_bytes() const { return row_cell_.size() * std::size_t(root_count()) * sizeof(double); }
   // The grid and the roots (the band's blocks bound D from them).
   const GridFrame& frame() const { return frame_; }
@@ -167,6 +175,10 @@ class LogLinearEnergy {
   mutable std::vector<std::int32_t> row_slot_;  // per active cell: its slot in the cache, or -1
   mutable std::vector<std::int64_t> row_cell_;  // per slot: its active cell
   mutable std::vector<std::unique_ptr<double[]>> row_chunks_;
+  mutable const void* row_owner_ = nullptr;
+  double memory_budget_bytes_ = 0;
+  // The roots by component (x, y, z, w), so that a row's squared distances vectorize.
+  std::vector<double> root_x_, root_y_, root_z_, root_w_;
   double energy_scale_ = 1;
   std::uint64_t weights_version_ = 0, variable_version_ = 0;
   double setup_seconds_ = 0;

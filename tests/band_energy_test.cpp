@@ -209,6 +209,36 @@ TEST(BandEnergyTest, RowCacheFollowsTheRequests) {
   EXPECT_EQ(small.RowOf(15, buffer.data()), buffer.data());
 }
 
+TEST(BandEnergyTest, IsolatedEvaluationsKeepRowsOnlyWhereNoBandAnchors) {
+  // The absolute energy's band (EvaluateOnce) keeps the rows it evaluates, so that the next
+  // absolute energy reads them; once a band that anchors keeps the evaluator's rows (a pass at the
+  // finest level shares the evaluator), isolated evaluations leave that cache alone.
+  const BandProblem p = MakeBandProblem(20, 10, 8, 3.0, 9.0, 11);
+  LogLinearOptions lo;
+  lo.storage = LogLinearOptions::Storage::kOnTheFly;
+  const LogLinearEnergy dense(p.map, p.grid, {}, lo);
+  BandEnergy once(&dense);
+  const Eigen::VectorXd x = p.map.variables();
+  const auto reference = dense.Evaluate(x);
+  EXPECT_EQ(dense.row_owner(), nullptr);
+  ExpectSame(once.EvaluateOnce(x, true), reference, "first isolated");
+  EXPECT_EQ(dense.row_owner(), &once);
+  const std::size_t kept = dense.cached_row_bytes();
+  EXPECT_GT(kept, 0u);
+  ExpectSame(once.EvaluateOnce(x, true), reference, "isolated, rows cached");
+  EXPECT_EQ(dense.cached_row_bytes(), kept);
+  BandEnergy pass(&dense, once.blocks());
+  ExpectSame(pass.Evaluate(x), reference, "anchoring band");
+  EXPECT_EQ(dense.row_owner(), &pass);
+  const std::size_t pass_rows = dense.cached_row_bytes();
+  Eigen::VectorXd y = x;
+  y[0] += 0.7;
+  ExpectSame(once.EvaluateOnce(y, true), dense.Evaluate(y), "isolated beside a band");
+  EXPECT_EQ(dense.row_owner(), &pass);
+  EXPECT_EQ(dense.cached_row_bytes(), pass_rows);
+  ExpectSame(pass.Evaluate(x), reference, "band after the isolated point");
+}
+
 TEST(BandEnergyTest, AutoStorageKeepsOnlyTheBandsRowsOfLargeMatrices) {
   // Read through a band, kAuto stores the matrix only up to an eighth of the budget.
   const BandProblem p = MakeBandProblem(12, 6, 5, 1.0, 2.0, 3);
