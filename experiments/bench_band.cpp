@@ -16,10 +16,10 @@
 #include "mesh/sdf_command.h"
 #include "optim/lbfgsb.h"
 #include "quijibo/band_energy.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/frame.h"
-#include "quijibo/io.h"
-#include "quijibo/progress.h"
+#include "util/io.h"
+#include "util/progress.h"
 
 namespace quijibo::cli {
 

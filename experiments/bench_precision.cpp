@@ -17,10 +17,10 @@
 
 #include "experiments/cli.h"
 #include "experiments/pipeline/energy.h"
-#include "quijibo/child_process.h"
-#include "quijibo/error.h"
+#include "util/child_process.h"
+#include "util/error.h"
 #include "quijibo/frame.h"
-#include "quijibo/progress.h"
+#include "util/progress.h"
 #include "quijibo/rational_map.h"
 #include "quijibo/target.h"
 

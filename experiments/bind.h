@@ -1,4 +1,4 @@
-// Command-line bindings of a stage's settings (quijibo/settings.h): each setting
+// Command-line bindings of a stage's settings (util/settings.h): each setting
 // with a flag becomes a CLI11 option on the same Options field, its default shown from the struct
 // (the same value `quijibo run` fills in) and its range checked with the same message.
 #pragma once
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "quijibo/settings.h"
+#include "util/settings.h"
 
 namespace quijibo::cli {
 

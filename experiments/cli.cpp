@@ -9,10 +9,10 @@
 #include "experiments/pipeline/energy.h"
 #include "experiments/pipeline/target.h"
 #include "mesh/sdf_command.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/frame.h"
-#include "quijibo/io.h"
-#include "quijibo/progress.h"
+#include "util/io.h"
+#include "util/progress.h"
 #include "quijibo/target.h"
 
 namespace quijibo::cli {

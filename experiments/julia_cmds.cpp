@@ -16,9 +16,9 @@
 #include "experiments/pipeline/mesh.h"
 #include "experiments/pipeline/pictures.h"
 #include "mesh/sdf_command.h"
-#include "quijibo/child_process.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/child_process.h"
+#include "util/error.h"
+#include "util/io.h"
 #include "quijibo/julia_batch.h"
 
 namespace quijibo::cli {

@@ -4,8 +4,8 @@
 #include <exception>
 
 #include "experiments/cli.h"
-#include "quijibo/error.h"
-#include "quijibo/progress.h"
+#include "util/error.h"
+#include "util/progress.h"
 
 namespace {
 

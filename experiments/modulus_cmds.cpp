@@ -14,9 +14,9 @@
 #include "experiments/pipeline/portal.h"
 #include "experiments/pipeline/product.h"
 #include "mesh/julia_field.h"
-#include "mesh/modulus_target.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "methods/modulus_target.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::cli {
 

@@ -9,9 +9,9 @@
 #include "mesh/sdf_command.h"
 #include "experiments/pipeline/optimize.h"
 #include "optim/optimizer.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/json_reader.h"
 
 namespace quijibo::cli {
 

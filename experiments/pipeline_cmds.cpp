@@ -21,10 +21,10 @@
 #include "monopole/fit_pipeline.h"
 #include "monopole/initial_guess.h"
 #include "monopole/kernel_fit.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/frame.h"
-#include "quijibo/io.h"
-#include "quijibo/progress.h"
+#include "util/io.h"
+#include "util/progress.h"
 
 namespace quijibo::cli {
 

@@ -5,7 +5,7 @@
 
 #include "experiments/cli.h"
 #include "experiments/pipeline/run.h"
-#include "quijibo/progress.h"
+#include "util/progress.h"
 
 namespace quijibo::cli {
 

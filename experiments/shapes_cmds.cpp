@@ -15,11 +15,11 @@
 #include "mesh/fidelity.h"
 #include "mesh/sdf_command.h"
 #include "mesh/triangle_mesh.h"
-#include "quijibo/child_process.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/json_reader.h"
-#include "quijibo/progress.h"
+#include "util/child_process.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/json_reader.h"
+#include "util/progress.h"
 
 namespace quijibo::cli {
 

@@ -5,8 +5,8 @@
 #include <unordered_map>
 
 #include "mesh/mesher_internal.h"
-#include "quijibo/error.h"
-#include "quijibo/progress.h"
+#include "util/error.h"
+#include "util/progress.h"
 
 namespace quijibo::mesh::mesher {
 

@@ -8,7 +8,7 @@
 #include <unordered_set>
 
 #include "mesh/sdf.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/iou.h"
 
 namespace quijibo::mesh {

@@ -28,8 +28,8 @@
 #include <sstream>
 
 #include "mesh/mesher_internal.h"
-#include "quijibo/error.h"
-#include "quijibo/progress.h"
+#include "util/error.h"
+#include "util/progress.h"
 
 namespace quijibo::mesh {
 

@@ -15,7 +15,7 @@
 
 #include "mesh/triangle_mesh.h"
 #include "quijibo/grid.h"
-#include "quijibo/settings.h"
+#include "util/settings.h"
 
 namespace quijibo::mesh {
 
@@ -54,7 +54,7 @@ struct MeshingOptions {
   // Added by issue 16: sparse: mesh the block across every face of a meshed block that the surface
   // crosses, until none is left, so no piece of surface the search touched is cut open.
   bool follow_surface = true;
-  bool show_progress = false;         // Progress on stderr (quijibo/progress.h)
+  bool show_progress = false;         // Progress on stderr (util/progress.h)
   std::string Validate() const;       // empty when valid, else what is wrong
 };
 

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "mesh/sdf.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::mesh {
 

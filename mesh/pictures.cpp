@@ -4,8 +4,8 @@
 #include <cmath>
 #include <limits>
 
-#include "quijibo/error.h"
-#include "quijibo/mask.h"
+#include "quijibo/grid.h"
+#include "util/error.h"
 
 namespace quijibo::mesh {
 

@@ -1,4 +1,4 @@
-// Pictures of a Julia set (PNG through quijibo/image.h):
+// Pictures of a Julia set (PNG through util/image.h):
 //  - a slice of the set against the target shape: agreement in grey, mismatches in two colours;
 //  - a slice of the iterate's modulus and versor (the 2023 paper's Fig. 2 idea);
 //  - a shaded rendering of a mesh from a few viewpoints (software z-buffer, Lambert shading).
@@ -11,7 +11,7 @@
 #include "mesh/marching_cubes.h"
 #include "mesh/triangle_mesh.h"
 #include "quijibo/grid.h"
-#include "quijibo/image.h"
+#include "util/image.h"
 #include "quijibo/julia.h"
 
 namespace quijibo::mesh {

@@ -7,7 +7,7 @@
 #include <numbers>
 #include <numeric>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::mesh {
 

@@ -6,9 +6,9 @@
 #include <nlohmann/json.hpp>
 
 #include "mesh/normalize.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/json_reader.h"
 
 namespace quijibo::mesh {
 

@@ -23,8 +23,8 @@
 #include <csignal>
 #include <cstdio>
 
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::mesh {
 

@@ -11,8 +11,8 @@
 #include <mutex>
 #include <sstream>
 
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::mesh {
 

@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "monopole/vec3_ops.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::monopole {
 

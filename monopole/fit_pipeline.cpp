@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <chrono>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::monopole {
 

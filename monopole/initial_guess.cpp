@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/target.h"
 
 namespace quijibo::monopole {

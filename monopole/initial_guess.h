@@ -16,7 +16,7 @@
 
 #include "monopole/monopole_fit.h"
 #include "quijibo/rational_map.h"
-#include "quijibo/settings.h"
+#include "util/settings.h"
 
 namespace quijibo::monopole {
 

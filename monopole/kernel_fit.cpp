@@ -9,7 +9,7 @@
 #include <Eigen/Dense>
 
 #include "monopole/sampling.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/iou.h"
 
 namespace quijibo::monopole {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::monopole {
 

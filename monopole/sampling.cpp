@@ -7,7 +7,7 @@
 #include <unordered_map>
 
 #include "monopole/vec3_ops.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::monopole {
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::monopole {
 

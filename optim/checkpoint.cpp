@@ -2,10 +2,10 @@
 
 #include <cstring>
 
-#include "quijibo/error.h"
-#include "quijibo/hash.h"
-#include "quijibo/io.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/hash.h"
+#include "util/io.h"
+#include "util/json_reader.h"
 
 namespace quijibo::optim {
 

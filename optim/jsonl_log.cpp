@@ -5,8 +5,8 @@
 #include <cstring>
 #include <filesystem>
 
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::optim {
 

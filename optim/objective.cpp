@@ -2,7 +2,7 @@
 
 #include "optim/level_objective.h"
 #include "optim/pass_weights.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/real.h"
 
 namespace quijibo::optim {

@@ -3,9 +3,9 @@
 #include <cmath>
 
 #include "optim/optimizer.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/json_reader.h"
 
 namespace quijibo::optim {
 

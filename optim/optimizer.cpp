@@ -19,8 +19,8 @@
 #include "optim/pass_weights.h"
 #include "optim/progress_line.h"
 #include "optim/run_state.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::optim {
 

@@ -30,11 +30,11 @@
 
 #include "optim/iteration_callback.h"
 #include "optim/schedule.h"
-#include "quijibo/json_reader.h"
+#include "util/json_reader.h"
 #include "quijibo/energy.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/real.h"
-#include "quijibo/settings.h"
+#include "util/settings.h"
 #include "quijibo/target.h"
 
 namespace quijibo::optim {
@@ -50,7 +50,7 @@ inline const std::vector<std::string> kEvaluatorNames = {"auto", "band", "dense"
 std::string ResolveEvaluator(const std::string& name, Precision precision);
 
 // Every optimizer setting, once: its default here, its JSON key, flag, help and range in Settings()
-// (quijibo/settings.h); FromJson, ToJson and Validate read those entries, `quijibo optimize` binds
+// (util/settings.h); FromJson, ToJson and Validate read those entries, `quijibo optimize` binds
 // them as its options and `quijibo run` and Python read the experiment's "optimizer" object with
 // FromJson. The schedule is read by hand (a notation, an object or a file).
 struct OptimizeOptions {

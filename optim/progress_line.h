@@ -1,4 +1,4 @@
-// The observer that draws "level 25 pass F  42%  psi -0.31" on a terminal (quijibo/progress.h):
+// The observer that draws "level 25 pass F  42%  psi -0.31" on a terminal (util/progress.h):
 // one progress bar per pass, against the pass's iteration cap. Internal to optim/.
 #pragma once
 
@@ -7,7 +7,7 @@
 
 #include "optim/iteration_callback.h"
 #include "optim/schedule.h"
-#include "quijibo/progress.h"
+#include "util/progress.h"
 
 namespace quijibo::optim {
 

@@ -3,8 +3,8 @@
 #include <cctype>
 #include <cmath>
 
-#include "quijibo/error.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/json_reader.h"
 
 namespace quijibo::optim {
 

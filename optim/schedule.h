@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "quijibo/json_reader.h"
-#include "quijibo/settings.h"
+#include "util/json_reader.h"
+#include "util/settings.h"
 
 namespace quijibo::optim {
 

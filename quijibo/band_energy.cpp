@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo {
 

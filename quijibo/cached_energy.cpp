@@ -4,7 +4,7 @@
 
 #include <chrono>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo {
 

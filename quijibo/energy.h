@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "quijibo/rational_map.h"
-#include "quijibo/settings.h"
+#include "util/settings.h"
 #include "quijibo/target.h"
 
 namespace quijibo {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo {
 

@@ -18,7 +18,7 @@
 #pragma once
 
 #include "quijibo/grid.h"
-#include "quijibo/settings.h"
+#include "util/settings.h"
 
 namespace quijibo {
 

@@ -8,8 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo {
 
@@ -151,6 +151,21 @@ ScalarGrid ReadGrid(const std::string& path) {
     if (!std::isfinite(g.values[c]))
       throw Error(path + ": value " + std::to_string(c) + " is not finite");
   return g;
+}
+
+double ExtendedSample(const ScalarGrid& grid, const Vec3& p) {
+  // Clamp to the box of cell centres (where the trilinear sample is defined), add the distance.
+  Vec3 c;
+  double d2 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    const double lo = grid.frame.min_corner[a] + 0.5 * grid.frame.spacing;
+    const double hi = lo + grid.frame.spacing * (grid.frame.dims[a] - 1);
+    c[a] = std::clamp(p[a], lo, hi);
+    const double e = p[a] - c[a];
+    d2 += e * e;
+  }
+  const double v = grid.sample(c);
+  return d2 > 0.0 ? v + std::sqrt(d2) : v;
 }
 
 }  // namespace quijibo

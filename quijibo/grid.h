@@ -78,4 +78,9 @@ struct ScalarGrid {
 void WriteGrid(const std::string& path, const ScalarGrid& grid);
 ScalarGrid ReadGrid(const std::string& path);
 
+// Signed distance of a ScalarGrid (fractal or any frame) extended beyond its box by the distance
+// to the box: clamp-to-edge sampling plus |p - clamp(p)|, so the field keeps growing outside
+// (the authors' code clamps only, so a far point sees the border value).
+double ExtendedSample(const ScalarGrid& grid, const Vec3& p);
+
 }  // namespace quijibo

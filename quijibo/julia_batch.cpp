@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 // glibc's math-vector.h declares libmvec's variants only under -ffast-math (which would also drop
 // NaN and signed-zero semantics); these declarations give GCC the same variants without it. Clang

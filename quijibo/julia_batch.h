@@ -12,7 +12,7 @@
 // Semantics are exactly those of JuliaMap<double>::Iterate: root translation, root scale, slice,
 // placement (StartingPoint), roots at the origin using the iterate's own log|q| and versor, the
 // escape test before each application, NaN stops the iteration and stays NaN. Values differ from
-// the scalar kernel's by the math library's rounding only (tests/julia_batch_test.cpp measures it).
+// the scalar kernel's by the math library's rounding only (tests/core/julia_batch_test.cpp measures it).
 // A node's value does not depend on its position in the batch or on the batch (chunks are padded
 // to full width, so no lane runs a scalar remainder loop), hence neither on tiles nor threads.
 #pragma once

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <limits>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo {
 

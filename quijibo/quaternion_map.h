@@ -15,7 +15,7 @@
 
 #include <memory>
 
-#include "quijibo/image.h"
+#include "util/image.h"
 #include "quijibo/julia.h"
 #include "quijibo/quaternion.h"
 #include "quijibo/rational_map.h"

@@ -5,9 +5,9 @@
 #include <limits>
 #include <random>
 
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/json_reader.h"
 
 namespace quijibo {
 

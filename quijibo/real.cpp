@@ -1,6 +1,6 @@
 #include "quijibo/real.h"
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo {
 

@@ -7,7 +7,7 @@
 #include <map>
 #include <sstream>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/iou.h"
 
 namespace quijibo {

@@ -6,7 +6,7 @@
 #include "experiments/cli.h"
 #include "experiments/mpi/mpi.h"
 #include "experiments/mpi/work_queue.h"
-#include "quijibo/progress.h"
+#include "util/progress.h"
 
 int main(int argc, char** argv) {
   int provided = 0;

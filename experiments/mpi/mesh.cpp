@@ -15,7 +15,7 @@
 
 #include "experiments/mpi/mpi.h"
 #include "experiments/mpi/work_queue.h"
-#include "quijibo/progress.h"
+#include "util/progress.h"
 
 namespace quijibo::mpi {
 

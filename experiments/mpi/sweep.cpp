@@ -12,8 +12,8 @@
 #include "experiments/cli.h"
 #include "experiments/mpi/mpi.h"
 #include "experiments/mpi/work_queue.h"
-#include "quijibo/child_process.h"
-#include "quijibo/progress.h"
+#include "util/child_process.h"
+#include "util/progress.h"
 
 namespace quijibo::mpi {
 

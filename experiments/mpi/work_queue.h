@@ -10,7 +10,7 @@
 #include <functional>
 #include <vector>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::mpi {
 

@@ -12,7 +12,7 @@
 #include "experiments/pipeline/settings.h"
 #include "mesh/triangle_mesh.h"
 #include "quijibo/energy.h"
-#include "quijibo/image.h"
+#include "util/image.h"
 #include "quijibo/julia.h"
 #include "quijibo/quaternion_map.h"
 

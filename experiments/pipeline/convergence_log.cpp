@@ -6,9 +6,9 @@
 #include <optional>
 #include <set>
 
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/json_reader.h"
 
 namespace quijibo::pipeline {
 

@@ -8,7 +8,7 @@
 
 #include "optim/optimizer.h"
 #include "quijibo/cached_energy.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::pipeline {
 

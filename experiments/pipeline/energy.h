@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "quijibo/settings.h"
+#include "util/settings.h"
 #include "quijibo/energy.h"
 #include "quijibo/grid.h"
 #include "quijibo/loglinear_energy.h"

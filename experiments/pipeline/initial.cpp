@@ -10,9 +10,9 @@
 #include "experiments/pipeline/product.h"
 #include "mesh/sdf_command.h"
 #include "quijibo/energy.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/progress.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/progress.h"
 #include "quijibo/target.h"
 
 namespace quijibo::pipeline {

@@ -14,7 +14,7 @@
 #include "monopole/fit_pipeline.h"
 #include "monopole/initial_guess.h"
 #include "monopole/kernel_fit.h"
-#include "quijibo/image.h"
+#include "util/image.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo::pipeline {

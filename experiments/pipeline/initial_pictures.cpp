@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "quijibo/io.h"
+#include "util/io.h"
 
 namespace quijibo::pipeline {
 

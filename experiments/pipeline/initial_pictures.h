@@ -6,7 +6,7 @@
 
 #include "monopole/bem.h"
 #include "quijibo/grid.h"
-#include "quijibo/image.h"
+#include "util/image.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo::pipeline {

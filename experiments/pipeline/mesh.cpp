@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "mesh/vdb.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::pipeline {
 

@@ -4,9 +4,9 @@
 #include <cctype>
 #include <cstdio>
 
-#include "mesh/modulus_target.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "methods/modulus_target.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::pipeline {
 

@@ -10,7 +10,7 @@
 
 #include "experiments/pipeline/product.h"
 #include "experiments/pipeline/settings.h"
-#include "quijibo/modulus.h"
+#include "methods/modulus.h"
 
 namespace quijibo::pipeline {
 
@@ -56,7 +56,7 @@ struct ModulusStageResult {
   nlohmann::json report;  // the stage's report (modulus.json; `quijibo modulus` prints it)
 };
 
-// The shape modulus of `target` (a mesh, a .qgrid or an analytic shape: mesh/modulus_target.h),
+// The shape modulus of `target` (a mesh, a .qgrid or an analytic shape: methods/modulus_target.h),
 // rendered or meshed; `out` (.png or .ply) decides 2D or 3D with the options. Writes nothing.
 ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions& options, const std::string& out);
 

@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::pipeline {
 

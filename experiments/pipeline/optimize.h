@@ -10,7 +10,7 @@
 
 #include "optim/optimizer.h"
 #include "quijibo/grid.h"
-#include "quijibo/json_reader.h"
+#include "util/json_reader.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo::pipeline {

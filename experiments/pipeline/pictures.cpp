@@ -7,8 +7,8 @@
 #include "mesh/julia_field.h"
 #include "mesh/sdf_command.h"
 #include "mesh/triangle_mesh.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::pipeline {
 

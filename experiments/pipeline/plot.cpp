@@ -17,9 +17,9 @@
 #include <filesystem>
 #include <sstream>
 
-#include "quijibo/child_process.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/child_process.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::pipeline {
 

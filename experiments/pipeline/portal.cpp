@@ -4,8 +4,8 @@
 #include <cctype>
 #include <functional>
 
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::pipeline {
 

@@ -9,7 +9,7 @@
 
 #include "experiments/pipeline/product.h"
 #include "experiments/pipeline/settings.h"
-#include "mesh/portal_scene.h"
+#include "methods/portal_scene.h"
 
 namespace quijibo::pipeline {
 

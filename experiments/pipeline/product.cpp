@@ -9,8 +9,8 @@
 
 #include "experiments/pipeline/mesh.h"
 #include "mesh/julia_field.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo::pipeline {
 

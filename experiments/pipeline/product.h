@@ -13,8 +13,8 @@
 #include "experiments/pipeline/settings.h"
 #include "mesh/marching_cubes.h"
 #include "mesh/triangle_mesh.h"
-#include "quijibo/image.h"
-#include "quijibo/modulus.h"
+#include "util/image.h"
+#include "methods/modulus.h"
 #include "quijibo/quaternion_map.h"
 
 namespace quijibo::pipeline {

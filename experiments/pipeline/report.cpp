@@ -5,7 +5,7 @@
 
 #include "experiments/pipeline/quality.h"
 #include "experiments/pipeline/run.h"
-#include "quijibo/io.h"
+#include "util/io.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo::pipeline {

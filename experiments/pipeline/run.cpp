@@ -20,9 +20,9 @@
 #include "experiments/pipeline/quality.h"
 #include "mesh/fidelity.h"
 #include "mesh/sdf_command.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/progress.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/progress.h"
 
 namespace quijibo::pipeline {
 

@@ -1,10 +1,10 @@
 // The pipeline's part of the settings: the seeds every stage defaults to. The schema mechanism
-// itself (Schema, Setting) is quijibo/settings.h, below the libraries.
+// itself (Schema, Setting) is util/settings.h, below the libraries.
 #pragma once
 
 #include <cstdint>
 
-#include "quijibo/settings.h"
+#include "util/settings.h"
 
 namespace quijibo::pipeline {
 

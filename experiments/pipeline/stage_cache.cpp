@@ -5,8 +5,8 @@
 #include <filesystem>
 
 #include "experiments/pipeline/product.h"
-#include "quijibo/hash.h"
-#include "quijibo/io.h"
+#include "util/hash.h"
+#include "util/io.h"
 
 namespace quijibo::pipeline {
 

@@ -6,7 +6,7 @@
 
 #include "mesh/sdf.h"
 #include "mesh/sdf_command.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/target.h"
 
 namespace quijibo::pipeline {

@@ -13,7 +13,7 @@
 
 #include "experiments/pipeline/experiment.h"
 #include "fuzz_input_file.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace {
 void PrepareFolder() {

@@ -11,7 +11,7 @@
 
 #include "fuzz_input_file.h"
 #include "mesh/triangle_mesh.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "mesh/mesh_fixtures.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/target.h"
 
 namespace quijibo::mesh {

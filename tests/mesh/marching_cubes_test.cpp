@@ -12,7 +12,7 @@
 #include "mesh/triangle_mesh.h"
 #include "mesh/vdb.h"
 #include "mesh_fixtures.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::mesh {
 namespace {

@@ -10,7 +10,7 @@
 #include "mesh/normalize.h"
 #include "mesh/triangle_mesh.h"
 #include "mesh_fixtures.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::mesh {
 namespace {

@@ -12,9 +12,9 @@
 #include "mesh/sdf_command.h"
 #include "mesh/vdb.h"
 #include "mesh_fixtures.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/frame.h"
-#include "quijibo/io.h"
+#include "util/io.h"
 
 namespace quijibo::mesh {
 namespace {

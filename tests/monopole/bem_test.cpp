@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "test_meshes.h"
 
 namespace quijibo::monopole {

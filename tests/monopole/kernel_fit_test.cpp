@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "monopole/test_meshes.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::monopole {
 namespace {

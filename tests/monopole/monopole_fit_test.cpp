@@ -10,7 +10,7 @@
 
 #include "monopole/fit_pipeline.h"
 #include "monopole/sampling.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "test_meshes.h"
 
 namespace quijibo::monopole {

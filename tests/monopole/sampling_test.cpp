@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "test_meshes.h"
 
 namespace quijibo::monopole {

@@ -4,7 +4,7 @@
 #include <fstream>
 
 #include "optim/optimizer.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::optim {
 namespace {

@@ -10,7 +10,7 @@
 #include "optim/optimizer.h"
 #include "optim/small_run.h"
 #include "output_compare.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::optim {
 namespace {

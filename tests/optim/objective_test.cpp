@@ -10,7 +10,7 @@
 #include "optim/objective.h"
 #include "optim/optimizer.h"
 #include "optim/small_run.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::optim {
 namespace {

@@ -12,8 +12,8 @@
 #include "optim/optimizer.h"
 #include "optim/reweight.h"
 #include "optim/schedule.h"
-#include "quijibo/error.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/json_reader.h"
 #include "optim/small_run.h"
 
 namespace quijibo::optim {

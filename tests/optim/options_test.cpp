@@ -6,8 +6,8 @@
 
 #include "optim/optimizer.h"
 #include "optim/schedule.h"
-#include "quijibo/error.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/json_reader.h"
 
 namespace quijibo::optim {
 namespace {

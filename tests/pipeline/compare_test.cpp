@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "experiments/pipeline/compare.h"
-#include "quijibo/io.h"
+#include "util/io.h"
 #include "quijibo/iou.h"
 #include "quijibo_command.h"
 

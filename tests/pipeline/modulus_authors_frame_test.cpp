@@ -6,9 +6,9 @@
 #include <filesystem>
 
 #include "experiments/pipeline/modulus.h"
-#include "mesh/modulus_target.h"
-#include "quijibo/error.h"
-#include "quijibo/modulus.h"
+#include "methods/modulus_target.h"
+#include "util/error.h"
+#include "methods/modulus.h"
 #include "tests/mesh/mesh_fixtures.h"
 
 namespace quijibo::pipeline {

@@ -5,7 +5,7 @@
 #include "experiments/pipeline/initial.h"
 #include "experiments/pipeline/target.h"
 #include "mesh/triangle_mesh.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "tests/mesh/mesh_fixtures.h"
 
 namespace quijibo::pipeline {

@@ -6,7 +6,7 @@
 
 #include "experiments/pipeline/optimize.h"
 #include "optim/small_run.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo::pipeline {
 namespace {

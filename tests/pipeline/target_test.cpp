@@ -8,7 +8,7 @@
 #include "tests/mesh/mesh_fixtures.h"
 #include "mesh/normalize.h"
 #include "mesh/sdf.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo::pipeline {

@@ -1,4 +1,4 @@
-"""The module's keyword defaults are the schemas' (`quijibo settings`, quijibo/settings.h): every keyword
+"""The module's keyword defaults are the schemas' (`quijibo settings`, util/settings.h): every keyword
 of a stage function that names a setting of its section has that setting's default, and a value outside
 the setting's range is refused with the range."""
 import ast

@@ -9,7 +9,7 @@
 #include <limits>
 #include <random>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/julia.h"
 #include "quijibo/julia_batch.h"
 #include "quijibo/rational_map.h"

@@ -9,15 +9,15 @@
 #include <fstream>
 #include <random>
 
-#include "quijibo/error.h"
-#include "quijibo/image.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/image.h"
+#include "util/io.h"
 #include "quijibo/target.h"
 #include "quijibo/frame.h"
-#include "quijibo/json_reader.h"
+#include "util/json_reader.h"
 #include "quijibo/quaternion_map.h"
-#include "quijibo/modulus.h"
-#include "quijibo/portal.h"
+#include "methods/modulus.h"
+#include "methods/portal.h"
 
 namespace quijibo {
 namespace {
@@ -378,7 +378,7 @@ TEST(Portal, KochSnowflakeIoU) {
   std::filesystem::remove(path);
 }
 
-// Portals on QUIJIBO rational maps: tests/modulus_features_test.cpp, Portal.OnAQuijiboMapRepeatsItsSet.
+// Portals on QUIJIBO rational maps: tests/methods/modulus_features_test.cpp, Portal.OnAQuijiboMapRepeatsItsSet.
 
 using quijibo::testing::CommandResult;
 using quijibo::testing::RunQuijibo;

@@ -41,7 +41,7 @@
 
 #include "quijibo/grid.h"
 #include "quijibo/quaternion_map.h"
-#include "quijibo/mask.h"
+#include "methods/mask.h"
 
 namespace quijibo {
 

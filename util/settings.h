@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "quijibo/json_reader.h"
+#include "util/json_reader.h"
 
 namespace quijibo {
 

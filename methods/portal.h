@@ -36,8 +36,8 @@
 #include <vector>
 
 #include "quijibo/quaternion_map.h"
-#include "quijibo/mask.h"
-#include "quijibo/modulus.h"
+#include "methods/mask.h"
+#include "methods/modulus.h"
 
 namespace quijibo {
 

@@ -1,10 +1,10 @@
-#include "quijibo/json_reader.h"
+#include "util/json_reader.h"
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo {
 

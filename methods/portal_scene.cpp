@@ -1,15 +1,15 @@
-#include "mesh/portal_scene.h"
+#include "methods/portal_scene.h"
 
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <functional>
 
-#include "mesh/modulus_target.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/json_reader.h"
-#include "quijibo/portal.h"
+#include "methods/modulus_target.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/json_reader.h"
+#include "methods/portal.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo::mesh {

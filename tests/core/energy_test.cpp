@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "quijibo/cached_energy.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/loglinear_energy.h"
 
 #include <omp.h>

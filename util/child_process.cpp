@@ -1,4 +1,4 @@
-#include "quijibo/child_process.h"
+#include "util/child_process.h"
 
 #include <fcntl.h>
 #include <spawn.h>
@@ -11,7 +11,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 extern char** environ;
 

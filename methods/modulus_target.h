@@ -10,8 +10,8 @@
 
 #include "mesh/triangle_mesh.h"
 #include "quijibo/grid.h"
-#include "quijibo/mask.h"
-#include "quijibo/modulus.h"
+#include "methods/mask.h"
+#include "methods/modulus.h"
 
 namespace quijibo::mesh {
 
@@ -45,7 +45,7 @@ LoadedTarget LoadModulusTarget(const std::string& spec, int sdf_resolution);
 MaskGridLoader MakeMaskGridLoader(int sdf_resolution);
 
 // A --params file: {"alpha": A, "beta": B, "origin_offset": [ox, oy, oz]}, A and B numbers or
-// parameter fields (quijibo/mask.h). Keys present override `so`. Throws quijibo::Error naming the
+// parameter fields (methods/mask.h). Keys present override `so`. Throws quijibo::Error naming the
 // file and JSON pointer.
 void ReadModulusParams(const std::string& path, ShapeModulusOptions& so, int sdf_resolution);
 

@@ -9,9 +9,9 @@
 #include <fstream>
 #include <vector>
 
-#include "quijibo/io.h"
-#include "quijibo/modulus.h"
-#include "quijibo/portal.h"
+#include "util/io.h"
+#include "methods/modulus.h"
+#include "methods/portal.h"
 #include "quijibo/quaternion_map.h"
 #include "quijibo_command.h"
 

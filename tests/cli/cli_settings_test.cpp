@@ -1,4 +1,4 @@
-// The command line agrees with the schemas (quijibo/settings.h): every option bound to a setting
+// The command line agrees with the schemas (util/settings.h): every option bound to a setting
 // shows the setting's default and accepts exactly its range and choices, and every command's target
 // grid resolution is the experiment's. The options are checked on the app `quijibo` parses, with
 // a required option never given, so a value is judged by CLI11's validation alone and no command runs.

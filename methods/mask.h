@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "quijibo/grid.h"
-#include "quijibo/json_reader.h"
+#include "util/json_reader.h"
 
 namespace quijibo {
 
@@ -53,11 +53,6 @@ using MaskGridLoader = std::function<std::shared_ptr<const ScalarGrid>(const std
 Mask MaskFromJson(const JsonReader& r, const std::string& pointer, const std::string& base_dir,
                   const MaskGridLoader& load = {});
 nlohmann::json MaskToJson(const Mask& m);
-
-// Signed distance of a ScalarGrid (fractal or any frame) extended beyond its box by the distance
-// to the box: clamp-to-edge sampling plus |p - clamp(p)|, so the field keeps growing outside
-// (the authors' code clamps only, so a far point sees the border value).
-double ExtendedSample(const ScalarGrid& grid, const Vec3& p);
 
 // Seeded 3D gradient noise (Perlin's improved noise, with gradients from a hashed lattice rather
 // than a permutation table): values roughly in [-1, 1], 0 at lattice points, C2 (quintic fade).

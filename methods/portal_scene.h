@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "quijibo/modulus.h"
+#include "methods/modulus.h"
 #include "quijibo/quaternion_map.h"
 
 namespace quijibo::mesh {

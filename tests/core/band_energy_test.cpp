@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "quijibo/band_energy.h"
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/loglinear_energy.h"
 
 namespace quijibo {

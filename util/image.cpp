@@ -1,12 +1,12 @@
-#include "quijibo/image.h"
+#include "util/image.h"
 
 #include <png.h>
 
 #include <cmath>
 #include <cstdio>
 
-#include "quijibo/error.h"
-#include "quijibo/io.h"
+#include "util/error.h"
+#include "util/io.h"
 
 namespace quijibo {
 

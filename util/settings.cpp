@@ -1,4 +1,4 @@
-#include "quijibo/settings.h"
+#include "util/settings.h"
 
 #include <unistd.h>
 

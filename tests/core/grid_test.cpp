@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 #include "quijibo/grid.h"
 
 namespace quijibo {

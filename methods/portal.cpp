@@ -1,8 +1,8 @@
-#include "quijibo/portal.h"
+#include "methods/portal.h"
 
 #include <cmath>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo {
 

@@ -1,4 +1,4 @@
-#include "quijibo/io.h"
+#include "util/io.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -12,7 +12,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "quijibo/error.h"
+#include "util/error.h"
 
 namespace quijibo {
 

@@ -1,4 +1,4 @@
-#include "quijibo/progress.h"
+#include "util/progress.h"
 
 #include <unistd.h>
 

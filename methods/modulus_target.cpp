@@ -1,4 +1,4 @@
-#include "mesh/modulus_target.h"
+#include "methods/modulus_target.h"
 
 #include <algorithm>
 #include <cctype>
@@ -7,9 +7,9 @@
 
 #include "mesh/sdf.h"
 #include "mesh/sdf_command.h"
-#include "quijibo/error.h"
-#include "quijibo/io.h"
-#include "quijibo/json_reader.h"
+#include "util/error.h"
+#include "util/io.h"
+#include "util/json_reader.h"
 
 namespace quijibo::mesh {
 
