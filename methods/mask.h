@@ -43,7 +43,7 @@ struct Mask {
 
 // Loads the grid of an "sdf" mask from its file (path already resolved against base_dir). The
 // default reads a .qgrid as is; the commands pass one that also accepts meshes
-// (experiments/modulus_cmds.h LoadMaskGrid), which the core library cannot turn into an SDF.
+// (`MakeMaskGridLoader`, methods/modulus_target.h), which mask.cpp alone cannot turn into an SDF.
 using MaskGridLoader = std::function<std::shared_ptr<const ScalarGrid>(const std::string& path)>;
 
 // {"type":"sphere","center":[x,y,z],"radius":r} | {"type":"box","center":..,"half_extent":..}

@@ -1,7 +1,7 @@
 // The settings of an Options struct, each defined once (the Ceres pattern): one Schema entry
 // holds a setting's JSON name, command-line flag, help, valid range and where it lives in the
 // struct; its default is the struct member's initializer. FromJson (JSON-pointer errors), ToJson,
-// Validate and the command-line bindings (experiments/bind.h) all read the same entries, so a
+// Validate and the command-line bindings (experiments/cli/bind.h) all read the same entries, so a
 // default, a range or a name cannot disagree between `quijibo run`, a subcommand and Python.
 // Below the libraries (optim, mesh, monopole, the pipeline), so that each can describe its own
 // Options; a range two structs share is a ValueRange constant beside the concept it bounds.

@@ -3,7 +3,7 @@
 
 #include <cstdio>
 
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 #include "experiments/mpi/mpi.h"
 #include "experiments/mpi/work_queue.h"
 #include "util/progress.h"

@@ -9,7 +9,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 #include "experiments/mpi/mpi.h"
 #include "experiments/mpi/work_queue.h"
 #include "util/child_process.h"

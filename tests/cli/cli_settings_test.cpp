@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "experiments/bind.h"
-#include "experiments/cli.h"
+#include "experiments/cli/bind.h"
+#include "experiments/cli/cli.h"
 #include "experiments/pipeline/experiment.h"
 
 namespace quijibo::cli {

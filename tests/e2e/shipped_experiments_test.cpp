@@ -83,7 +83,7 @@ json Shrink(json e) {
   return e;
 }
 
-// The stages a run of `e` (resolved) must record, in order (experiments/run_cmd.cpp).
+// The stages a run of `e` (resolved) must record, in order (experiments/cli/run.cpp).
 std::vector<std::string> ExpectedStages(const json& e) {
   const std::string method = e["method"];
   if (method != "quijibo") {

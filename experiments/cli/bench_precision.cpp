@@ -15,7 +15,7 @@
 #include <map>
 #include <sstream>
 
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 #include "experiments/pipeline/energy.h"
 #include "util/child_process.h"
 #include "util/error.h"

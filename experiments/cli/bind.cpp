@@ -1,4 +1,4 @@
-#include "experiments/bind.h"
+#include "experiments/cli/bind.h"
 
 #include "quijibo/frame.h"
 

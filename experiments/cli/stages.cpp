@@ -9,8 +9,8 @@
 #include <ctime>
 #include <filesystem>
 
-#include "experiments/bind.h"
-#include "experiments/cli.h"
+#include "experiments/cli/bind.h"
+#include "experiments/cli/cli.h"
 #include "experiments/pipeline/initial.h"
 #include "experiments/pipeline/product.h"
 #include "experiments/pipeline/target.h"

@@ -27,8 +27,8 @@ void AddModulusCommands(CLI::App& app);  // modulus, portal, compare, bench modu
 void AddJuliaCommands(CLI::App& app);   // mesh, picture, bench mesh (after AddBenchCommand)
 void AddShapeCommands(CLI::App& app);  // fidelity, bench shapes (after AddBenchCommand)
 void AddBenchBandCommand(CLI::App& app);  // bench band (after AddBenchCommand)
-void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/run_cmd.cpp)
-// Every subcommand above, in this order, and `settings` (experiments/commands.cpp).
+void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/cli/run.cpp)
+// Every subcommand above, in this order, and `settings` (experiments/cli/commands.cpp).
 void AddCommands(CLI::App& app);
 
 // `quijibo mesh` with another mesher (quijibo-mpi, docs/mpi.md; pipeline::Mesher).

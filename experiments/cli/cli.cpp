@@ -1,11 +1,11 @@
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
 
-#include "experiments/bind.h"
+#include "experiments/cli/bind.h"
 #include "experiments/pipeline/energy.h"
 #include "experiments/pipeline/target.h"
 #include "mesh/sdf_command.h"

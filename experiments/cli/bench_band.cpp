@@ -12,7 +12,7 @@
 #include <chrono>
 #include <cstdio>
 
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 #include "mesh/sdf_command.h"
 #include "optim/lbfgsb.h"
 #include "quijibo/band_energy.h"

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "experiments/bind.h"
-#include "experiments/cli.h"
+#include "experiments/cli/bind.h"
+#include "experiments/cli/cli.h"
 #include "experiments/pipeline/compare.h"
 #include "experiments/pipeline/modulus.h"
 #include "experiments/pipeline/portal.h"

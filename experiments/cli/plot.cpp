@@ -1,6 +1,6 @@
 // `quijibo plot`: the plot stage (experiments/pipeline/plot.h) on the command line.
-#include "experiments/bind.h"
-#include "experiments/cli.h"
+#include "experiments/cli/bind.h"
+#include "experiments/cli/cli.h"
 #include "experiments/pipeline/plot.h"
 
 namespace quijibo::cli {

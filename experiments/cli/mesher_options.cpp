@@ -1,6 +1,6 @@
 // The mesher's command-line options, one definition shared by `quijibo mesh`, `quijibo modulus` and
 // `quijibo portal` (docs/meshing.md); its summary is pipeline::MesherSummaryJson.
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 
 namespace quijibo::cli {
 

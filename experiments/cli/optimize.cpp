@@ -4,8 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "experiments/bind.h"
-#include "experiments/cli.h"
+#include "experiments/cli/bind.h"
+#include "experiments/cli/cli.h"
 #include "mesh/sdf_command.h"
 #include "experiments/pipeline/optimize.h"
 #include "optim/optimizer.h"

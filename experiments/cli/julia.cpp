@@ -11,8 +11,8 @@
 #include <map>
 #include <sstream>
 
-#include "experiments/bind.h"
-#include "experiments/cli.h"
+#include "experiments/cli/bind.h"
+#include "experiments/cli/cli.h"
 #include "experiments/pipeline/mesh.h"
 #include "experiments/pipeline/pictures.h"
 #include "mesh/sdf_command.h"

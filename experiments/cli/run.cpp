@@ -3,7 +3,7 @@
 // (pipeline::RunExperiment; docs/experiments.md).
 #include <cstdio>
 
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 #include "experiments/pipeline/run.h"
 #include "util/progress.h"
 

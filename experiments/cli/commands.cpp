@@ -1,6 +1,6 @@
 // Every subcommand of `quijibo` on one app (main.cpp, and the tests that compare the command line's
 // options with the schemas), and `quijibo settings`: the schemas themselves.
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 #include "experiments/pipeline/experiment.h"
 
 namespace quijibo::cli {

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <exception>
 
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 #include "util/error.h"
 #include "util/progress.h"
 
