@@ -27,6 +27,18 @@ RationalMap SmallMap(std::uint64_t seed = 3) {
   return m;
 }
 
+// One top root at the origin with a steep exponent (and a negligible bottom root): L = ln C +
+// 40 log|q|, with ln C = 0 the one-step set the unit ball, |grad L| = 40 on its surface.
+RationalMap SteepBallMap() {
+  RationalMap m;
+  m.top_roots = {{0, 0, 0, 0}};
+  m.top_exponents = {40.0};
+  m.bottom_roots = {{2.9, 0, 0, 0}};
+  m.bottom_exponents = {1e-9};
+  m.ln_C = 0.0;
+  return m;
+}
+
 std::vector<Vec3> Points(int n, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::vector<Vec3> p(n);
@@ -157,16 +169,11 @@ TEST(Julia, RootTranslationChangesNothingForOneIteration) {
   EXPECT_GT(differ, 10);
 }
 
-// The reference's bail-out at |q| < 10 FLT_MIN, as an option. One steep top root at the origin:
-// L = 40 log|q|, the one-step set the unit ball. Translated by t = (0, 0, 1.5), every point of the
+// The reference's bail-out at |q| < 10 FLT_MIN, as an option. On the steep ball map translated by t = (0, 0, 1.5), every point of the
 // ball is sent within |R| of -t, outside the ball, and escapes at the next step; with a capture
 // radius the deep inside stops there and stays in the set.
 TEST(Julia, ACaptureRadiusKeepsTheDeepInsideOfATranslatedSteepMap) {
-  RationalMap m;
-  m.top_roots = {{0, 0, 0, 0}};
-  m.top_exponents = {40.0};
-  m.bottom_roots = {{2.9, 0, 0, 0}};
-  m.bottom_exponents = {1e-9};
+  const RationalMap m = SteepBallMap();
   JuliaOptions o;
   o.iterations = 4;
   o.root_translation = {0, 0, 1.5, 0};
@@ -232,14 +239,7 @@ TEST(Julia, TheReferenceFrameHasTheShapeThreeUnitsLongAboutTheBoxCentre) {
 }
 
 TEST(Julia, DetailWidensTheBandAboutTheSurfaceAndKeepsTheOneStepSet) {
-  // One top root at the origin with a steep exponent: L = ln C + 40 log|q|, the one-step set the
-  // ball of radius e^(-ln C / 40) = 1, |grad L| = 40 on its surface.
-  RationalMap m;
-  m.top_roots = {{0, 0, 0, 0}};
-  m.top_exponents = {40.0};
-  m.bottom_roots = {{2.9, 0, 0, 0}};
-  m.bottom_exponents = {1e-9};
-  m.ln_C = 0.0;
+  const RationalMap m = SteepBallMap();
   EXPECT_NEAR(SurfaceSteepness(m), 40.0, 0.5);
   // 10 % of the shape box's side (3 units): a band 0.3 wide, lambda = 2 / (0.3 * 40).
   double lambda = 0;
