@@ -31,7 +31,7 @@ namespace {
 struct FidelityArgs {
   std::string map, target, julia_mesh, shape_mesh, out;
   mesh::FidelityOptions o;
-  pipeline::MeshStageOptions iteration;  // the mesh stage's iteration_frame, detail and translate
+  pipeline::MeshStageOptions iteration;  // the mesh stage's iteration_frame, detail, translate and capture
 };
 
 void AddFidelityOptions(CLI::App* c, mesh::FidelityOptions& o) {
@@ -53,6 +53,7 @@ json Measure(const FidelityArgs& a) {
   o.detail = a.iteration.detail;
   pipeline::MeshStageOptions iteration = a.iteration;
   iteration.julia = o.julia;
+  iteration.julia.capture_radius = a.iteration.julia.capture_radius;
   o.julia = iteration.TranslatedJulia();
   mesh::Fidelity f = mesh::MeasureSets(map, target, o);
   if (!a.julia_mesh.empty() || !a.shape_mesh.empty()) {
@@ -367,7 +368,7 @@ void AddFidelityCommand(CLI::App& app) {
   AddFidelityOptions(c, a->o);
   c->add_option("--closing", a->o.closing, "Closed IoU: half side of the closing's cube, lattice cells")
       ->capture_default_str()->check(CLI::Range(0, 16));
-  BindSettings(c, a->iteration, {"iteration_frame", "detail", "translate"});
+  BindSettings(c, a->iteration, {"iteration_frame", "detail", "translate", "capture"});
   c->callback([a] { WriteOutput(a->out, Measure(*a).dump(1) + "\n"); });
 }
 
