@@ -13,6 +13,7 @@
 #include "quijibo/julia.h"
 #include "quijibo/julia_batch.h"
 #include "quijibo/rational_map.h"
+#include "tests/core/julia_fixtures.h"
 
 namespace quijibo {
 namespace {
@@ -23,19 +24,7 @@ namespace {
 constexpr double kRelativeTolerance = 1e-11;
 
 RationalMap BatchTestMap(std::uint64_t seed, int top, int bottom, bool zero_roots) {
-  RandomMapOptions o;
-  o.top = top;
-  o.bottom = bottom;
-  o.root_radius = 1.2;
-  o.exponent_min = 0.3;
-  o.exponent_max = 1.2;
-  o.leading_zero_roots = zero_roots;
-  o.seed = seed;
-  RationalMap m = RandomMap(o);
-  m.tau = 1.1;
-  m.beta = 0.9;
-  m.ln_C = -0.4;
-  return m;
+  return testing::JuliaTestMap(seed, top, bottom, zero_roots);
 }
 
 std::vector<Vec3> BatchPoints(int n, std::uint64_t seed, double half = 2.0) {

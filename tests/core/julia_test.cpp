@@ -8,24 +8,12 @@
 #include "util/error.h"
 #include "quijibo/julia.h"
 #include "quijibo/rational_map.h"
+#include "tests/core/julia_fixtures.h"
 
 namespace quijibo {
 namespace {
 
-RationalMap SmallMap(std::uint64_t seed = 3) {
-  RandomMapOptions o;
-  o.top = 12;
-  o.bottom = 9;
-  o.root_radius = 1.2;
-  o.exponent_min = 0.3;
-  o.exponent_max = 1.2;
-  o.seed = seed;
-  RationalMap m = RandomMap(o);
-  m.tau = 1.1;
-  m.beta = 0.9;
-  m.ln_C = -0.4;
-  return m;
-}
+RationalMap SmallMap(std::uint64_t seed = 3) { return testing::JuliaTestMap(seed); }
 
 // One top root at the origin with a steep exponent (and a negligible bottom root): L = ln C +
 // 40 log|q|, with ln C = 0 the one-step set the unit ball, |grad L| = 40 on its surface.
