@@ -75,15 +75,12 @@ namespace {
 // log|d| and the versor of d^a: [cos(a theta), axis sin(a theta)].
 template <class Real>
 inline void LogAndVersor(const Quaternion<Real>& d, const Real& a, Real& log_norm, Quaternion<Real>& u) {
-  using std::atan2;
   using std::cos;
-  using std::log;
   using std::sin;
-  using std::sqrt;
-  const Real v2 = d.x * d.x + d.y * d.y + d.z * d.z;
-  const Real vn = sqrt(v2);
-  log_norm = Real(0.5) * log(d.w * d.w + v2);
-  const Real phi = a * atan2(vn, d.w);
+  const PolarForm<Real> polar = Polar(d);
+  const Real vn = polar.vector_norm;
+  log_norm = polar.log_norm;
+  const Real phi = a * polar.theta;
   const Real c = cos(phi), s = sin(phi);
   if (vn > Real(0)) {
     const Real k = s / vn;
@@ -91,6 +88,44 @@ inline void LogAndVersor(const Quaternion<Real>& d, const Real& a, Real& log_nor
   } else {
     u = {c, s, Real(0), Real(0)};  // axis i for reals, as quaternion.h's log
   }
+}
+
+// The polar split of q that JuliaResult reports: log|q| and the versor q / |q| (1 for q = 0).
+template <class Real>
+void LogModulusAndVersor(const Quaternion<Real>& q, Real& log_modulus, Quaternion<Real>& versor) {
+  using std::log;
+  using std::sqrt;
+  const Real n = sqrt(q.norm2());
+  log_modulus = log(n);
+  versor = n > Real(0) ? q * (Real(1) / n) : Quaternion<Real>(Real(1), Real(0), Real(0), Real(0));
+}
+
+// Multiplies one factor (q - root)^e of R into Apply's sums: its versor into u, and e log|q - root|
+// into L; a bottom factor (kBottom) enters as its inverse: the conjugate versor, -e log|q - root|.
+// A root at the origin takes q's own versor and adds +-e to zero_coefficient instead of L: the
+// caller adds zero_coefficient log|q| once.
+template <bool kBottom, class Real>
+inline void MultiplyFactor(const Quaternion<Real>& q, const Quaternion<Real>& q_versor, const Quaternion<Real>& root,
+                           const Real& e, bool root_at_origin, Real& L, Real& zero_coefficient, Quaternion<Real>& u) {
+  Real ln;
+  Quaternion<Real> f;
+  if (root_at_origin) {
+    LogAndVersor(q_versor, e, ln, f);
+    if constexpr (kBottom)
+      zero_coefficient -= e;
+    else
+      zero_coefficient += e;
+  } else {
+    LogAndVersor(q - root, e, ln, f);
+    if constexpr (kBottom)
+      L -= e * ln;
+    else
+      L += e * ln;
+  }
+  if constexpr (kBottom)
+    u = u * f.conj();
+  else
+    u = u * f;
 }
 
 }  // namespace
@@ -101,29 +136,11 @@ void JuliaMap<Real>::Apply(const Quaternion<Real>& q, const Real& q_log, const Q
   using std::sqrt;
   Real L = ln_C_, zero_coefficient(0);
   Quaternion<Real> u(Real(1), Real(0), Real(0), Real(0));
-  Real ln;
-  Quaternion<Real> f;
-  for (std::size_t i = 0; i < top_.size(); ++i) {
-    if (top_zero_[i]) {
-      LogAndVersor(q_versor, top_exp_[i], ln, f);
-      zero_coefficient += top_exp_[i];
-    } else {
-      LogAndVersor(q - top_[i], top_exp_[i], ln, f);
-      L += top_exp_[i] * ln;
-    }
-    u = u * f;
-  }
+  for (std::size_t i = 0; i < top_.size(); ++i)
+    MultiplyFactor<false>(q, q_versor, top_[i], top_exp_[i], top_zero_[i] != 0, L, zero_coefficient, u);
   // B^-1 = Q_nb^-1 ... Q_1^-1; the versor of Q^-1 is conj(u(Q)).
-  for (std::size_t i = bottom_.size(); i-- > 0;) {
-    if (bottom_zero_[i]) {
-      LogAndVersor(q_versor, bottom_exp_[i], ln, f);
-      zero_coefficient -= bottom_exp_[i];
-    } else {
-      LogAndVersor(q - bottom_[i], bottom_exp_[i], ln, f);
-      L -= bottom_exp_[i] * ln;
-    }
-    u = u * f.conj();
-  }
+  for (std::size_t i = bottom_.size(); i-- > 0;)
+    MultiplyFactor<true>(q, q_versor, bottom_[i], bottom_exp_[i], bottom_zero_[i] != 0, L, zero_coefficient, u);
   if (zero_coefficient != Real(0)) L += zero_coefficient * q_log;
   const Real un = sqrt(u.norm2());  // products of unit quaternions drift by rounding only
   log_modulus = L;
@@ -141,13 +158,9 @@ std::vector<typename JuliaMap<Real>::Factor> JuliaMap<Real>::Factors() const {
 template <class Real>
 JuliaResult<Real> JuliaMap<Real>::Iterate(const Quaternion<Real>& q0) const {
   using std::exp;
-  using std::log;
-  using std::sqrt;
   JuliaResult<Real> r;
   Quaternion<Real> q = q0;
-  const Real n0 = sqrt(q0.norm2());
-  r.log_modulus = log(n0);
-  r.versor = n0 > Real(0) ? q0 * (Real(1) / n0) : Quaternion<Real>(Real(1), Real(0), Real(0), Real(0));
+  LogModulusAndVersor(q0, r.log_modulus, r.versor);
   for (int k = 0; k < options_.iterations; ++k) {
     if (!(r.log_modulus < log_escape_)) break;  // escaped (or NaN)
     if (k > 0 && r.log_modulus < log_capture_) break;  // captured (the start itself is not)
@@ -162,7 +175,6 @@ JuliaResult<Real> JuliaMap<Real>::Iterate(const Quaternion<Real>& q0) const {
 template <class Real>
 JuliaResult<Real> JuliaMap<Real>::IterateDirect(const Quaternion<Real>& q0) const {
   using std::exp;
-  using std::log;
   using std::sqrt;
   JuliaResult<Real> r;
   Quaternion<Real> q = q0;
@@ -183,10 +195,8 @@ JuliaResult<Real> JuliaMap<Real>::IterateDirect(const Quaternion<Real>& q0) cons
     q = (T * B.inverse()) * eC;
     ++r.iterations;
   }
-  const Real n = sqrt(q.norm2());
-  r.log_modulus = log(n);
-  r.versor = n > Real(0) ? q * (Real(1) / n) : Quaternion<Real>(Real(1), Real(0), Real(0), Real(0));
-  r.escaped = !(n < escape);
+  LogModulusAndVersor(q, r.log_modulus, r.versor);
+  r.escaped = !(sqrt(q.norm2()) < escape);
   return r;
 }
 

@@ -115,20 +115,31 @@ Quaternion<Real> pow(const Quaternion<Real>& q, const Real& a) {
   return exp(log(q) * a);
 }
 
+// The polar form of d that the fused kernels (LogAndPower, the Julia iteration's versors) start from:
+// |v| of the vector part, ln|d| and the angle theta = atan2(|v|, w), from one sum of squares.
+template <class Real>
+struct PolarForm {
+  Real vector_norm, log_norm, theta;
+};
+
+template <class Real>
+PolarForm<Real> Polar(const Quaternion<Real>& d) {
+  using std::atan2;
+  using std::log;
+  using std::sqrt;
+  const Real v2 = d.x * d.x + d.y * d.y + d.z * d.z;
+  const Real vn = sqrt(v2);
+  return {vn, Real(0.5) * log(d.w * d.w + v2), atan2(vn, d.w)};
+}
+
 // Fused log and power of one quaternion: lg = log(d) and p = d^a = exp(a lg), sharing the
 // norms and the angle (the evaluators need both for every root of every cell).
 template <class Real>
 void LogAndPower(const Quaternion<Real>& d, const Real& a, Quaternion<Real>& lg, Quaternion<Real>& p) {
-  using std::atan2;
   using std::cos;
   using std::exp;
-  using std::log;
   using std::sin;
-  using std::sqrt;
-  const Real v2 = d.x * d.x + d.y * d.y + d.z * d.z;
-  const Real vn = sqrt(v2);
-  const Real log_norm = Real(0.5) * log(d.w * d.w + v2);
-  const Real theta = atan2(vn, d.w);
+  const auto [vn, log_norm, theta] = Polar(d);
   Real ax(1), ay(0), az(0);  // axis i for reals, as log()
   if (vn > Real(0)) {
     const Real inv = Real(1) / vn;
