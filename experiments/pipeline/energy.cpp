@@ -113,9 +113,8 @@ json Report(const RationalMap& map, const Evaluation<Real>& ev, const std::vecto
   return r;
 }
 
-
-}  // namespace
-
+// EnergyStage's evaluations on a level grid already made: the report but its weights (`weights`
+// is not read; the grid's are the caller's).
 json EvaluateEnergy(const RationalMap& map, const EnergyGrid& grid, const EnergyStageOptions& choice) {
   if (auto why = EnergyStageOptions::Settings().Check(choice); !why.empty()) throw Error("energy: " + why);
   const EnergyOptions& options = choice.energy;
@@ -165,6 +164,7 @@ json EvaluateEnergy(const RationalMap& map, const EnergyGrid& grid, const Energy
   return out;
 }
 
+}  // namespace
 
 json EnergyStage(const RationalMap& map, const ScalarGrid& target, const EnergyStageOptions& options) {
   const EnergyGrid grid = MakeEnergyGrid(target, options.weights, options.resolution, options.level_weights,

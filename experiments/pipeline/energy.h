@@ -37,13 +37,10 @@ struct EnergyStageOptions {
                                      const std::filesystem::path& base);
 };
 
-// Evaluates psi (and its gradient) of `map` on `grid` `repeats` times; returns the report: energy
-// (number and exact decimal string), gradient (numbers, named, and exact strings), cell counts,
-// seconds of each evaluation and their median, set-up seconds, storage used, the settings. The
-// grid's weights are the caller's (`weights` is not read).
-nlohmann::json EvaluateEnergy(const RationalMap& map, const EnergyGrid& grid, const EnergyStageOptions& options);
-
-// The level grid of `options` on `target`, then EvaluateEnergy; the report names the weights.
+// Evaluates psi (and its gradient) of `map` on the level grid of `options` on `target` `repeats`
+// times; returns the report: energy (number and exact decimal string), gradient (numbers, named,
+// and exact strings), cell counts, seconds of each evaluation and their median, set-up seconds,
+// storage used, the settings and the weights.
 nlohmann::json EnergyStage(const RationalMap& map, const ScalarGrid& target, const EnergyStageOptions& options);
 
 }  // namespace quijibo::pipeline
