@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "tests/core/energy_fixtures.h"
 #include "quijibo/band_energy.h"
 #include "util/error.h"
 #include "quijibo/loglinear_energy.h"
@@ -9,29 +10,12 @@
 namespace quijibo {
 namespace {
 
-// A sphere target on an n^3 grid and a seeded random map centred on the grid (median L = 0).
-// Large exponents make L steep, as after an optimization: most cells saturate.
-struct BandProblem {
-  EnergyGrid grid;
-  RationalMap map;
-};
+using testing::EnergyProblem;
+using testing::MakeEnergyProblem;
 
-BandProblem MakeBandProblem(int n, int top, int bottom, double emin, double emax, std::uint64_t seed) {
-  BandProblem p;
-  const ScalarGrid sdf = AnalyticTarget("sphere:radius=1", GridFrame::Cube(n, {0.01, -0.02, 0.03}, 3.0));
-  p.grid = MakeEnergyGrid(sdf, WeightField::kBalanced);
-  RandomMapOptions o;
-  o.top = top;
-  o.bottom = bottom;
-  o.exponent_min = emin;
-  o.exponent_max = emax;
-  o.root_radius = 1.2;
-  o.seed = seed;
-  p.map = RandomMap(o);
-  p.map.tau = 0.9;
-  p.map.beta = 1.1;
-  p.map.ln_C = -MedianLogModulus(p.map, p.grid);
-  return p;
+// The band's problems: the optimizer's weight field.
+EnergyProblem MakeBandProblem(int n, int top, int bottom, double emin, double emax, std::uint64_t seed) {
+  return MakeEnergyProblem(n, top, bottom, emin, emax, seed, WeightField::kBalanced);
 }
 
 double Relative(double a, double b) { return std::fabs(a - b) / std::max(1e-300, std::fabs(b)); }
@@ -59,7 +43,7 @@ TEST(BandEnergyTest, SaturatedTanhIsExactlyOne) {
 TEST(BandEnergyTest, MatchesDenseOnRandomMaps) {
   for (auto storage : {LogLinearOptions::Storage::kDouble, LogLinearOptions::Storage::kOnTheFly}) {
     for (std::uint64_t seed : {1, 2}) {
-      const BandProblem p = MakeBandProblem(18, 9, 7, 0.5, 3.0, seed);
+      const EnergyProblem p = MakeBandProblem(18, 9, 7, 0.5, 3.0, seed);
       LogLinearOptions lo;
       lo.storage = storage;
       const LogLinearEnergy dense(p.map, p.grid, {}, lo);
@@ -73,7 +57,7 @@ TEST(BandEnergyTest, MatchesDenseOnRandomMaps) {
 
 // Seeded moves of every variable, then far moves and new weights: band and dense stay identical.
 BandStats CheckAlongMoves(int n, const LogLinearOptions& lo) {
-  const BandProblem p = MakeBandProblem(n, 12, 10, 4.0, 12.0, 7);
+  const EnergyProblem p = MakeBandProblem(n, 12, 10, 4.0, 12.0, 7);
   LogLinearEnergy dense(p.map, p.grid, {}, lo);
   BandEnergy band(&dense);
   Eigen::VectorXd x = p.map.variables();
@@ -162,7 +146,7 @@ TEST(BandEnergyTest, BlocksMatchDenseAlongMoves) {
 TEST(BandEnergyTest, RowCacheFollowsTheRequests) {
   // CacheRows keeps the rows asked for, with the values Row computes, and drops the others once
   // they would make up a quarter of the cache: it follows the band rather than accumulating.
-  const BandProblem p = MakeBandProblem(16, 6, 5, 1.0, 2.0, 3);
+  const EnergyProblem p = MakeBandProblem(16, 6, 5, 1.0, 2.0, 3);
   LogLinearOptions lo;
   lo.storage = LogLinearOptions::Storage::kOnTheFly;
   const LogLinearEnergy dense(p.map, p.grid, {}, lo);
@@ -213,7 +197,7 @@ TEST(BandEnergyTest, IsolatedEvaluationsKeepRowsOnlyWhereNoBandAnchors) {
   // The absolute energy's band (EvaluateOnce) keeps the rows it evaluates, so that the next
   // absolute energy reads them; once a band that anchors keeps the evaluator's rows (a pass at the
   // finest level shares the evaluator), isolated evaluations leave that cache alone.
-  const BandProblem p = MakeBandProblem(20, 10, 8, 3.0, 9.0, 11);
+  const EnergyProblem p = MakeBandProblem(20, 10, 8, 3.0, 9.0, 11);
   LogLinearOptions lo;
   lo.storage = LogLinearOptions::Storage::kOnTheFly;
   const LogLinearEnergy dense(p.map, p.grid, {}, lo);
@@ -241,7 +225,7 @@ TEST(BandEnergyTest, IsolatedEvaluationsKeepRowsOnlyWhereNoBandAnchors) {
 
 TEST(BandEnergyTest, AutoStorageKeepsOnlyTheBandsRowsOfLargeMatrices) {
   // Read through a band, kAuto stores the matrix only up to an eighth of the budget.
-  const BandProblem p = MakeBandProblem(12, 6, 5, 1.0, 2.0, 3);
+  const EnergyProblem p = MakeBandProblem(12, 6, 5, 1.0, 2.0, 3);
   LogLinearOptions lo;
   lo.storage = LogLinearOptions::Storage::kDouble;
   const double bytes = double(LogLinearEnergy(p.map, p.grid, {}, lo).matrix_bytes());
@@ -265,7 +249,7 @@ TEST(BandEnergyTest, AutoStorageKeepsOnlyTheBandsRowsOfLargeMatrices) {
 TEST(BandEnergyTest, BlockBoundsHoldForEveryCell) {
   // The premise of a block anchor: every cell's D is within e_j of the block centre's, within q_j
   // of its first-order Taylor expansion about the centre, and its row norm within N_B.
-  const BandProblem p = MakeBandProblem(21, 6, 5, 1.0, 2.0, 3);
+  const EnergyProblem p = MakeBandProblem(21, 6, 5, 1.0, 2.0, 3);
   LogLinearOptions lo;
   lo.storage = LogLinearOptions::Storage::kOnTheFly;
   const LogLinearEnergy dense(p.map, p.grid, {}, lo);
@@ -300,13 +284,13 @@ TEST(BandEnergyTest, BlockBoundsHoldForEveryCell) {
   EXPECT_EQ(checked, dense.active_count());
   EXPECT_GT(finite, blocks->count() / 2);
   // Blocks belong to their evaluator.
-  const BandProblem q = MakeBandProblem(21, 7, 5, 1.0, 2.0, 3);
+  const EnergyProblem q = MakeBandProblem(21, 7, 5, 1.0, 2.0, 3);
   const LogLinearEnergy other(q.map, q.grid, {}, lo);
   EXPECT_THROW(BandEnergy(&other, blocks), Error);
 }
 
 TEST(BandEnergyTest, VariablePassMatchesDense) {
-  const BandProblem p = MakeBandProblem(20, 10, 8, 3.0, 9.0, 11);
+  const EnergyProblem p = MakeBandProblem(20, 10, 8, 3.0, 9.0, 11);
   LogLinearEnergy dense(p.map, p.grid);
   BandEnergy band(&dense);
   const Eigen::VectorXd x = p.map.variables();

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "tests/core/energy_fixtures.h"
 #include "quijibo/cached_energy.h"
 #include "util/error.h"
 #include "quijibo/loglinear_energy.h"
@@ -9,33 +10,8 @@
 namespace quijibo {
 namespace {
 
-// A small problem: a sphere target on an n^3 grid and a seeded random map whose level set
-// crosses the grid, so many cells sit on the steep part of tanh.
-struct Problem {
-  ScalarGrid sdf;
-  EnergyGrid grid;
-  RationalMap map;
-};
-
-Problem MakeProblem(int n, int top, int bottom, double emin, double emax, std::uint64_t seed,
-                    WeightField w = WeightField::kLayer, bool zero_roots = false) {
-  Problem p;
-  p.sdf = AnalyticTarget("sphere:radius=1", GridFrame::Cube(n, {0.01, -0.02, 0.03}, 3.0));
-  p.grid = MakeEnergyGrid(p.sdf, w);
-  RandomMapOptions o;
-  o.top = top;
-  o.bottom = bottom;
-  o.exponent_min = emin;
-  o.exponent_max = emax;
-  o.root_radius = 1.2;
-  o.seed = seed;
-  o.leading_zero_roots = zero_roots;
-  p.map = RandomMap(o);
-  p.map.tau = 0.9;
-  p.map.beta = 1.1;
-  p.map.ln_C = -MedianLogModulus(p.map, p.grid);
-  return p;
-}
+using testing::EnergyProblem;
+using testing::MakeEnergyProblem;
 
 // Central differences of psi, componentwise, in the evaluator's own type.
 template <class Real, class Eval>
@@ -70,7 +46,7 @@ void Tolerances(Real& h, double& tol) {
 TYPED_TEST(CachedEnergyTest, GradientMatchesCentralDifferences) {
   using Real = TypeParam;
   using V = Eigen::Matrix<Real, -1, 1>;
-  const Problem p = MakeProblem(8, 4, 3, 0.3, 1.5, 5, WeightField::kLayer, true);
+  const EnergyProblem p = MakeEnergyProblem(8, 4, 3, 0.3, 1.5, 5, WeightField::kLayer, true);
   const CachedEnergy<Real> energy(p.map, p.grid);
   const V x = p.map.variables().cast<Real>();
   const Evaluation<Real> ev = energy.Evaluate(x);
@@ -96,7 +72,7 @@ TYPED_TEST(CachedEnergyTest, GradientMatchesCentralDifferences) {
 
 TEST(LogLinearEnergyTest, GradientMatchesCentralDifferences) {
   for (WeightField w : {WeightField::kLayer, WeightField::kInverse}) {
-    const Problem p = MakeProblem(9, 6, 5, 0.3, 2.0, 9, w);
+    const EnergyProblem p = MakeEnergyProblem(9, 6, 5, 0.3, 2.0, 9, w);
     for (auto storage : {LogLinearOptions::Storage::kDouble, LogLinearOptions::Storage::kOnTheFly}) {
       LogLinearOptions lo;
       lo.storage = storage;
@@ -114,7 +90,7 @@ TEST(LogLinearEnergyTest, GradientMatchesCentralDifferences) {
 }
 
 TEST(LogLinearEnergyTest, VariablePassMatchesFullEvaluation) {
-  const Problem p = MakeProblem(10, 7, 6, 0.3, 2.0, 4);
+  const EnergyProblem p = MakeEnergyProblem(10, 7, 6, 0.3, 2.0, 4);
   LogLinearEnergy energy(p.map, p.grid);
   Eigen::VectorXd x = p.map.variables();
   EXPECT_THROW(energy.Evaluate(x, EnergyMode::kVariable), Error);
@@ -129,7 +105,7 @@ TEST(LogLinearEnergyTest, VariablePassMatchesFullEvaluation) {
 }
 
 TEST(LogLinearEnergyTest, ResultDoesNotDependOnThreadCount) {
-  const Problem p = MakeProblem(16, 8, 6, 0.3, 2.0, 2);
+  const EnergyProblem p = MakeEnergyProblem(16, 8, 6, 0.3, 2.0, 2);
   const LogLinearEnergy energy(p.map, p.grid);
   const Eigen::VectorXd x = p.map.variables();
   const int saved = omp_get_max_threads();
@@ -145,7 +121,7 @@ TEST(LogLinearEnergyTest, ResultDoesNotDependOnThreadCount) {
 // The paper's evaluator in 80 and 128 bits and the log-linear one in double compute the same
 // numbers wherever the former does not overflow.
 TEST(EvaluatorAgreement, CachedExtendedAndLogLinearAgreeTo1e12) {
-  const Problem p = MakeProblem(14, 11, 9, 0.5, 3.0, 21, WeightField::kLayer, true);
+  const EnergyProblem p = MakeEnergyProblem(14, 11, 9, 0.5, 3.0, 21, WeightField::kLayer, true);
   const Eigen::VectorXd x = p.map.variables();
   const auto ll = LogLinearEnergy(p.map, p.grid).Evaluate(x);
   const auto ld = CachedEnergy<long double>(p.map, p.grid).Evaluate(x);
@@ -165,7 +141,7 @@ TEST(EvaluatorAgreement, CachedExtendedAndLogLinearAgreeTo1e12) {
 // Realistic exponents make |T(q)| exceed double's range: the paper's evaluator in double loses
 // cells (counted, not propagated), the log-linear evaluator in double stays exact.
 TEST(EvaluatorAgreement, CachedDoubleOverflowsWhereLogLinearIsRight) {
-  const Problem p = MakeProblem(12, 60, 40, 20.0, 40.0, 8);
+  const EnergyProblem p = MakeEnergyProblem(12, 60, 40, 20.0, 40.0, 8);
   const Eigen::VectorXd x = p.map.variables();
   const auto dbl = CachedEnergy<double>(p.map, p.grid).Evaluate(x);
   const auto ld = CachedEnergy<long double>(p.map, p.grid).Evaluate(x);
@@ -222,7 +198,7 @@ TEST(EnergyTest, PerfectAndInvertedFitsReachTheBounds) {
 }
 
 TEST(EnergyTest, BadVariablesAreRejected) {
-  const Problem p = MakeProblem(6, 2, 2, 0.5, 1.0, 1);
+  const EnergyProblem p = MakeEnergyProblem(6, 2, 2, 0.5, 1.0, 1);
   const LogLinearEnergy e(p.map, p.grid);
   Eigen::VectorXd x = p.map.variables();
   EXPECT_THROW(e.Evaluate(x.head(3)), Error);

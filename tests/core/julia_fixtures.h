@@ -9,15 +9,8 @@
 namespace quijibo::testing {
 
 inline RationalMap JuliaTestMap(std::uint64_t seed, int top = 12, int bottom = 9, bool zero_roots = false) {
-  RandomMapOptions o;
-  o.top = top;
-  o.bottom = bottom;
-  o.root_radius = 1.2;
-  o.exponent_min = 0.3;
-  o.exponent_max = 1.2;
-  o.leading_zero_roots = zero_roots;
-  o.seed = seed;
-  RationalMap m = RandomMap(o);
+  RationalMap m = RandomMap({.top = top, .bottom = bottom, .root_radius = 1.2, .exponent_min = 0.3, .exponent_max = 1.2,
+                             .leading_zero_roots = zero_roots, .seed = seed});
   m.tau = 1.1;
   m.beta = 0.9;
   m.ln_C = -0.4;

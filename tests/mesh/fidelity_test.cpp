@@ -24,10 +24,15 @@ ScalarGrid SphereTarget(double radius) {
   return AnalyticTarget("sphere:radius=" + std::to_string(radius), TargetGridFrame(60, FractalFrame{}));
 }
 
-TEST(Fidelity, AMapWhoseSetIsTheTargetScoresOneAndDoesNotLeak) {
+// The fidelity of Ball(radius) to the unit sphere, its n-step set after `iterations` (0: none).
+Fidelity BallFidelity(double radius, int iterations) {
   FidelityOptions o;
-  o.julia.iterations = 0;
-  const Fidelity f = MeasureSets(Ball(1.0), SphereTarget(1.0), o);
+  o.julia.iterations = iterations;
+  return MeasureSets(Ball(radius), SphereTarget(1.0), o);
+}
+
+TEST(Fidelity, AMapWhoseSetIsTheTargetScoresOneAndDoesNotLeak) {
+  const Fidelity f = BallFidelity(1.0, 0);
   EXPECT_GT(f.one_step.iou, 0.97);
   EXPECT_EQ(f.one_step.leak_nodes, 0);
   EXPECT_FALSE(f.has_n_step);
@@ -35,22 +40,18 @@ TEST(Fidelity, AMapWhoseSetIsTheTargetScoresOneAndDoesNotLeak) {
 
 TEST(Fidelity, ASetTooLargeLeaksOutOfTheShapeBox) {
   // The shape box B has half side 1.5 (radius 4, padding 0.125); a ball of radius 1.9 pokes out.
-  FidelityOptions o;
-  o.julia.iterations = 0;
-  const Fidelity f = MeasureSets(Ball(1.9), SphereTarget(1.0), o);
+  const Fidelity f = BallFidelity(1.9, 0);
   EXPECT_GT(f.one_step.leak, 0.1);
   EXPECT_LT(f.one_step.iou, 0.2);
   // A smaller set is inside the target: IoU = (0.8 / 1)^3.
-  const Fidelity g = MeasureSets(Ball(0.8), SphereTarget(1.0), o);
+  const Fidelity g = BallFidelity(0.8, 0);
   EXPECT_NEAR(g.one_step.iou, 0.512, 0.03);
   EXPECT_EQ(g.one_step.leak_nodes, 0);
 }
 
 TEST(Fidelity, TheNStepSetOfAPowerMapIsTheUnitBall) {
   // R(q) = q: every iterate keeps |q|, so the n-step set is the unit ball too.
-  FidelityOptions o;
-  o.julia.iterations = 3;
-  const Fidelity f = MeasureSets(Ball(1.0), SphereTarget(1.0), o);
+  const Fidelity f = BallFidelity(1.0, 3);
   ASSERT_TRUE(f.has_n_step);
   EXPECT_NEAR(f.n_step.iou, f.one_step.iou, 0.02);
 }

@@ -117,15 +117,8 @@ inline std::multiset<std::array<Vec3, 3>> Canonical(const mesh::TriangleMesh& m)
 // A small random map (12 top, 9 bottom roots) whose set at n = 1 contains the origin: ln C puts
 // L(0) at -1; with or without roots at the origin.
 inline RationalMap SmallSetMap(bool zero_roots = false) {
-  RandomMapOptions o;
-  o.top = 12;
-  o.bottom = 9;
-  o.root_radius = 1.2;
-  o.exponent_min = 0.3;
-  o.exponent_max = 1.2;
-  o.leading_zero_roots = zero_roots;
-  o.seed = 4;
-  RationalMap m = RandomMap(o);
+  RationalMap m = RandomMap({.top = 12, .bottom = 9, .root_radius = 1.2, .exponent_min = 0.3, .exponent_max = 1.2,
+                             .leading_zero_roots = zero_roots, .seed = 4});
   m.ln_C = 0;
   JuliaOptions j;
   j.iterations = 1;

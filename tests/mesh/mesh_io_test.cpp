@@ -10,12 +10,14 @@
 #include "mesh/normalize.h"
 #include "mesh/triangle_mesh.h"
 #include "mesh_fixtures.h"
+#include "thrown_message.h"
 #include "util/error.h"
 
 namespace quijibo::mesh {
 namespace {
 
 using testing::TempDir;
+using testing::ThrownMessage;
 
 // Unit cube, quads counter-clockwise seen from outside (1-based like OBJ/OFF files).
 const char* kCubeVertices = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n";
@@ -214,12 +216,7 @@ TEST(MeshRead, BadInputNamesTheFileAndTheElement) {
 TEST(MeshValidate, IndexOutOfRangeAndNonFinite) {
   TriangleMesh m = CubeTriangles();
   m.triangles[3][1] = 8;
-  try {
-    ValidateMesh(m, "cube");
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "cube: triangle 3 uses vertex 8, outside [0, 8)");
-  }
+  EXPECT_EQ(ThrownMessage([&] { ValidateMesh(m, "cube"); }), "cube: triangle 3 uses vertex 8, outside [0, 8)");
   m = CubeTriangles();
   m.vertices[5][2] = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(ValidateMesh(m, "cube"), Error);

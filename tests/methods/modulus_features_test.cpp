@@ -11,6 +11,7 @@
 
 #include "util/io.h"
 #include "methods/modulus.h"
+#include "modulus_fixtures.h"
 #include "methods/portal.h"
 #include "quijibo/quaternion_map.h"
 #include "quijibo_command.h"
@@ -20,13 +21,7 @@ namespace {
 
 using nlohmann::json;
 
-Versor PolynomialVersor(std::uint64_t seed) {
-  VersorGeneratorOptions o;
-  o.seed = seed;
-  Versor v;
-  v.polynomial = GenerateVersorPolynomial(o);
-  return v;
-}
+using testing::PolynomialVersor;
 
 // Inside flags (field < 0) of `map` on an n^3 grid of cell centres over [lo, hi]^3 (k = 0).
 std::vector<char> InsideGrid(const QuaternionMap& map, int n, double lo, double hi, const IterationOptions& jo,
@@ -121,14 +116,7 @@ TEST(OriginOffset, MovesTheSetWhileTheOriginStaysInsideThenErodesIt) {
 // modulus is that of the constant-300 map wherever the ramp has not started (bit for bit), and
 // the Julia set is the alpha-300 set on that side and the alpha-10 set on the other.
 TEST(VaryingAlpha, ChangesTheSetOnlyWhereItVaries) {
-  ParameterField alpha(300.0);
-  ParameterField::Region r;
-  r.mask.type = Mask::Type::kHalfspace;
-  r.mask.normal = {1, 0, 0};
-  r.mask.offset = 0.0;
-  r.value = 10.0;
-  r.feather = 0.2;
-  alpha.regions.push_back(r);
+  const ParameterField alpha = testing::HalfspaceStep();
   auto make = [&](const ParameterField& a) {
     ShapeModulusOptions so;
     so.alpha = a;

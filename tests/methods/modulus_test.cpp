@@ -18,6 +18,7 @@
 #include "quijibo/quaternion_map.h"
 #include "methods/modulus.h"
 #include "methods/portal.h"
+#include "modulus_fixtures.h"
 
 namespace quijibo {
 namespace {
@@ -25,13 +26,8 @@ namespace {
 using nlohmann::json;
 
 TEST(VersorPolynomial, GeneratorIsDeterministicAndInRange) {
-  VersorGeneratorOptions o;
-  o.roots = 12;
-  o.min_power = 2;
-  o.max_power = 5;
-  o.seed = 42;
-  o.box_min = {-0.3, -0.2, -0.1};
-  o.box_max = {0.3, 0.2, 0.1};
+  VersorGeneratorOptions o{
+      .roots = 12, .min_power = 2, .max_power = 5, .box_min = {-0.3, -0.2, -0.1}, .box_max = {0.3, 0.2, 0.1}, .seed = 42};
   const VersorPolynomial a = GenerateVersorPolynomial(o), b = GenerateVersorPolynomial(o);
   EXPECT_EQ(a.roots, b.roots);
   EXPECT_EQ(a.powers, b.powers);
@@ -118,12 +114,7 @@ TEST(ShapeModulus, DirectionIsTheNormalizedProduct) {
 }
 
 TEST(ShapeModulus, RationalMapAdapterMatchesProductForm) {
-  RandomMapOptions ro;
-  ro.top = 4;
-  ro.bottom = 3;
-  ro.ln_C = 0.3;
-  ro.seed = 5;
-  const RationalMap m = RandomMap(ro);
+  const RationalMap m = RandomMap({.top = 4, .bottom = 3, .ln_C = 0.3, .seed = 5});
   RationalQuaternionMap rq(m);
   const Quat q{0.4, -0.2, 0.3, 0.1};
   Quat t{1, 0, 0, 0}, b{1, 0, 0, 0};
@@ -136,10 +127,7 @@ TEST(ShapeModulus, RationalMapAdapterMatchesProductForm) {
 
 // At high alpha the inside of the Julia set is the inside of the target (2023 §3.3.1).
 TEST(ShapeModulus, HighAlphaSetMatchesSphere) {
-  VersorGeneratorOptions o;
-  o.seed = 11;
-  Versor v;
-  v.polynomial = GenerateVersorPolynomial(o);
+  const Versor v = testing::PolynomialVersor(11);
   ShapeModulusOptions so;
   so.alpha = 300.0;
   ShapeModulusMap map(AnalyticModulusTarget("sphere:radius=0.4"), v, so);
@@ -192,10 +180,7 @@ TEST(AuthorsFrame, JuliaSetOfAnEllipsoidIsSwappedAndStretched) {
   AuthorsFrame f;
   f.sdf_resolution = 100;
   f.nodes = 91;  // stretch 0.9, so that the test sees it (and the origin stays inside)
-  VersorGeneratorOptions o;
-  o.seed = 5;
-  Versor v;
-  v.polynomial = GenerateVersorPolynomial(o);
+  const Versor v = testing::PolynomialVersor(5);
   ShapeModulusOptions so;
   so.alpha = 300.0;
   ShapeModulusMap map(InAuthorsFrame(t, f), v, so);
@@ -219,9 +204,7 @@ TEST(AuthorsFrame, JuliaSetOfAnEllipsoidIsSwappedAndStretched) {
 
 // Paper's sign: exp(alpha (phi + beta)); the surface is near phi = -beta.
 TEST(ShapeModulus, NegativeBetaMovesTheSurfaceOutwards) {
-  VersorGeneratorOptions o;
-  Versor v;
-  v.polynomial = GenerateVersorPolynomial(o);
+  const Versor v = testing::PolynomialVersor(1);  // the generator's default seed
   auto inside = [&](double beta) {
     ShapeModulusOptions so;
     so.alpha = 300.0;
@@ -237,14 +220,7 @@ TEST(ShapeModulus, NegativeBetaMovesTheSurfaceOutwards) {
 }
 
 TEST(ParameterField, CubicBlendBetweenRegions) {
-  ParameterField f(300.0);
-  ParameterField::Region r;
-  r.mask.type = Mask::Type::kHalfspace;
-  r.mask.normal = {1, 0, 0};
-  r.mask.offset = 0.0;
-  r.value = 10.0;
-  r.feather = 0.2;
-  f.regions.push_back(r);
+  const ParameterField f = testing::HalfspaceStep();
   EXPECT_DOUBLE_EQ(f({-0.2, 0, 0}), 10.0);
   EXPECT_DOUBLE_EQ(f({0.2, 0, 0}), 300.0);
   EXPECT_DOUBLE_EQ(f({0.0, 0, 0}), 155.0);
@@ -260,9 +236,7 @@ TEST(ParameterField, CubicBlendBetweenRegions) {
 // B(x) is 0 on the mask boundary and rises smoothly to 1 at the feather depth, so the portal
 // map is continuous across the boundary.
 TEST(Portal, FeatheredBlendIsContinuous) {
-  VersorGeneratorOptions o;
-  Versor v;
-  v.polynomial = GenerateVersorPolynomial(o);
+  const Versor v = testing::PolynomialVersor(1);  // the generator's default seed
   ShapeModulusOptions so;
   so.alpha = 5.0;
   auto base = std::make_shared<ShapeModulusMap>(AnalyticModulusTarget("sphere:radius=0.3"), v, so);

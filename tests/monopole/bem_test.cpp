@@ -7,9 +7,12 @@
 
 #include "util/error.h"
 #include "test_meshes.h"
+#include "thrown_message.h"
 
 namespace quijibo::monopole {
 namespace {
+
+using testing::ThrownMessage;
 
 // Brute force: the triangle split into 4^levels pieces, midpoint-free 3-point rule on each.
 double BruteForce(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c, int levels) {
@@ -132,25 +135,16 @@ TEST(Bem, BadOptionsAndMeshesAreRejected) {
   const auto mesh = testing::MakeIcosphere(0);
   BemOptions opt;
   opt.max_elements = 2;
-  try {
-    SolveExteriorPotential(mesh.vertices, mesh.triangles, opt);
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("bem.max_elements"), std::string::npos) << e.what();
-  }
+  const std::string too_few = ThrownMessage([&] { SolveExteriorPotential(mesh.vertices, mesh.triangles, opt); });
+  EXPECT_NE(too_few.find("bem.max_elements"), std::string::npos) << too_few;
   opt = {};
   opt.far_factor = 0.5;
   EXPECT_NE(opt.Validate().find("bem.far_factor"), std::string::npos);
   EXPECT_THROW(SolveExteriorPotential(mesh.vertices, {}, {}), Error);
   auto bad = mesh.triangles;
   bad[3][1] = 99;
-  try {
-    SolveExteriorPotential(mesh.vertices, bad, {});
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("triangle 3 refers to vertex 99"), std::string::npos)
-        << e.what();
-  }
+  const std::string outside = ThrownMessage([&] { SolveExteriorPotential(mesh.vertices, bad, {}); });
+  EXPECT_NE(outside.find("triangle 3 refers to vertex 99"), std::string::npos) << outside;
 }
 
 }  // namespace

@@ -40,6 +40,11 @@ TwoSpheres MakeTwoSpheres(double r1, double r2) {
   return t;
 }
 
+// The log-kernel fit of the two spheres in the fractal frame with `o`; its summary into *s if given.
+RationalMap Fit(const TwoSpheres& t, const KernelFitOptions& o, KernelFitSummary* s = nullptr) {
+  return KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, s);
+}
+
 TEST(KernelFit, StartsCloseOnTwoSpheresOfDifferentSize) {
   // A small sphere beside a large one: a fit that only captures the bulk loses the small one.
   const TwoSpheres t = MakeTwoSpheres(0.7, 0.3);
@@ -47,7 +52,7 @@ TEST(KernelFit, StartsCloseOnTwoSpheresOfDifferentSize) {
   o.roots = 120;
   o.origin_root = false;  // the origin lies between the spheres, outside the shape
   KernelFitSummary s;
-  const RationalMap m = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &s);
+  const RationalMap m = Fit(t, o, &s);
   const StartCheck c = CheckStart(m, t.sdf);
   EXPECT_FALSE(c.inverted);
   EXPECT_LT(c.median_inside, 0);
@@ -69,7 +74,7 @@ TEST(KernelFit, TheOriginRootMakesTheOriginAZeroAndTheFitAccountsForIt) {
   TwoSpheres t = MakeTwoSpheres(1.0, 1.0);
   KernelFitOptions o;
   o.roots = 120;
-  const RationalMap m = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
+  const RationalMap m = Fit(t, o);
   ASSERT_GE(m.top_count(), 1);
   EXPECT_EQ(m.top_roots[0], (Vec4{0, 0, 0, 0}));
   EXPECT_EQ(m.top_exponents[0], 1.0);
@@ -87,9 +92,9 @@ TEST(KernelFit, RefinementAddsRootsWhereTheFitIsWrong) {
   o.roots = 16;
   o.origin_root = false;
   KernelFitSummary plain, refined;
-  const RationalMap a = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &plain);
+  const RationalMap a = Fit(t, o, &plain);
   o.refine_rounds = 2;
-  const RationalMap b = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &refined);
+  const RationalMap b = Fit(t, o, &refined);
   EXPECT_EQ(plain.refine_rounds, 0);
   EXPECT_GE(refined.refine_rounds, 1);
   EXPECT_GT(b.root_count(), a.root_count());
@@ -100,8 +105,8 @@ TEST(KernelFit, IsDeterministic) {
   const TwoSpheres t = MakeTwoSpheres(0.6, 0.4);
   KernelFitOptions o;
   o.roots = 60;
-  const RationalMap a = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
-  const RationalMap b = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
+  const RationalMap a = Fit(t, o);
+  const RationalMap b = Fit(t, o);
   EXPECT_EQ(a.top_exponents, b.top_exponents);
   EXPECT_EQ(a.bottom_exponents, b.bottom_exponents);
   EXPECT_EQ(a.ln_C, b.ln_C);
@@ -111,7 +116,7 @@ TEST(KernelFit, CheckStartDetectsAnInvertedMap) {
   const TwoSpheres t = MakeTwoSpheres(0.7, 0.5);
   KernelFitOptions o;
   o.roots = 60;
-  RationalMap m = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
+  RationalMap m = Fit(t, o);
   std::swap(m.top_roots, m.bottom_roots);
   std::swap(m.top_exponents, m.bottom_exponents);
   m.ln_C = -m.ln_C;
@@ -160,7 +165,7 @@ TEST(KernelFit, ThinPartsGetDenserRootPairsAndTheSpacingRuleSetsTheCount) {
   o.offset_cells = 4;  // the plate, 3 cells thick, shortens its pairs' offsets below 1.5 cells
   o.origin_root = false;
   o.roots = o.max_roots = 200;
-  const RationalMap m = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o);
+  const RationalMap m = Fit(t, o);
   EXPECT_EQ(m.root_count(), 200);
   int near_plate = 0;
   for (const auto* roots : {&m.top_roots, &m.bottom_roots})
@@ -174,9 +179,9 @@ TEST(KernelFit, ThinPartsGetDenserRootPairsAndTheSpacingRuleSetsTheCount) {
   o.max_roots = 1000;
   o.spacing = 2;
   KernelFitSummary wide, narrow;
-  const RationalMap a = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &wide);
+  const RationalMap a = Fit(t, o, &wide);
   o.spacing = 1;
-  const RationalMap b = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &narrow);
+  const RationalMap b = Fit(t, o, &narrow);
   EXPECT_EQ(wide.spacing, 2);
   EXPECT_EQ(narrow.spacing, 1);
   EXPECT_GT(b.root_count(), 2.5 * a.root_count());
@@ -184,7 +189,7 @@ TEST(KernelFit, ThinPartsGetDenserRootPairsAndTheSpacingRuleSetsTheCount) {
   // And the bound binds: the spacing grows until the count fits.
   o.max_roots = b.root_count() / 4 * 2;  // even: pairs
   KernelFitSummary capped;
-  const RationalMap c = KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, &capped);
+  const RationalMap c = Fit(t, o, &capped);
   EXPECT_EQ(c.root_count(), o.max_roots);
   EXPECT_GT(capped.spacing, 1.2);
 }
@@ -193,13 +198,13 @@ TEST(KernelFit, RejectsBadOptions) {
   const TwoSpheres t = MakeTwoSpheres(0.7, 0.5);
   KernelFitOptions o;
   o.roots = 2;
-  EXPECT_THROW(KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o), Error);
+  EXPECT_THROW(Fit(t, o), Error);
   o = {};
   o.band_cells = -1;
-  EXPECT_THROW(KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o), Error);
+  EXPECT_THROW(Fit(t, o), Error);
   o = {};
   o.spacing = 0.5;
-  EXPECT_THROW(KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o), Error);
+  EXPECT_THROW(Fit(t, o), Error);
 }
 
 }  // namespace

@@ -12,9 +12,12 @@
 #include "monopole/sampling.h"
 #include "util/error.h"
 #include "test_meshes.h"
+#include "thrown_message.h"
 
 namespace quijibo::monopole {
 namespace {
+
+using testing::ThrownMessage;
 
 // Points on the sphere of radius r about c (icosphere vertices, level 3: 642 points).
 std::vector<Vec3> SpherePoints(const Vec3& c, double r) {
@@ -185,13 +188,8 @@ TEST(Monopole, BadOptionsAreRejected) {
   const SphereProblem p = MakeSphereProblem(300);
   GreedyFitOptions opt;
   opt.epsilon = 1.5;
-  try {
-    GreedyMonopoleFit(p.points, p.targets, p.candidates, opt);
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()),
-              "fit.epsilon (relative residual) must be in [0, 1), found 1.500000");
-  }
+  EXPECT_EQ(ThrownMessage([&] { GreedyMonopoleFit(p.points, p.targets, p.candidates, opt); }),
+            "fit.epsilon (relative residual) must be in [0, 1), found 1.500000");
   opt = {};
   opt.batch_size = 0;
   EXPECT_NE(opt.Validate().find("fit.batch_size"), std::string::npos);

@@ -6,9 +6,12 @@
 
 #include "util/error.h"
 #include "test_meshes.h"
+#include "thrown_message.h"
 
 namespace quijibo::monopole {
 namespace {
+
+using testing::ThrownMessage;
 
 double MinPairDistance(const std::vector<Vec3>& p) {
   double best = HUGE_VAL;
@@ -65,12 +68,8 @@ TEST(Sampling, BadOptionsAreRejected) {
   const auto mesh = testing::MakeIcosphere(0);
   SamplingOptions opt;
   opt.count = 0;
-  try {
-    PoissonDiskSample(mesh.vertices, mesh.triangles, opt);
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "sampling.count must be positive, found 0");
-  }
+  EXPECT_EQ(ThrownMessage([&] { PoissonDiskSample(mesh.vertices, mesh.triangles, opt); }),
+            "sampling.count must be positive, found 0");
   opt = {};
   opt.oversampling = 0.5;
   EXPECT_NE(opt.Validate().find("sampling.oversampling"), std::string::npos);

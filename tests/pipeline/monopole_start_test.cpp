@@ -20,14 +20,15 @@ monopole::GreedyFitSummary Fit(double residual, monopole::FitStop stop) {
   return f;
 }
 
+// The verdict on `start` after a fit that stopped at `residual` for `stop`, with epsilon 0.04 and
+// 100000 candidates.
+MonopoleStartVerdict Judge(double residual, monopole::FitStop stop, const monopole::StartCheck& start) {
+  return JudgeMonopoleStart(Fit(residual, stop), 0.04, 100000, start);
+}
+
 TEST(MonopoleStart, AnInvertedStartIsRefusedWithTheResidualAndWhatToDo) {
-  monopole::StartCheck start;
-  start.median_inside = -0.607;
-  start.median_outside = -0.656;
-  start.iou = 0.0914;
-  start.inverted = true;
-  const MonopoleStartVerdict v =
-      JudgeMonopoleStart(Fit(0.0407289, monopole::FitStop::kCandidatesExhausted), 0.04, 100000, start);
+  const monopole::StartCheck start{.median_inside = -0.607, .median_outside = -0.656, .iou = 0.0914, .inverted = true};
+  const MonopoleStartVerdict v = Judge(0.0407289, monopole::FitStop::kCandidatesExhausted, start);
   ASSERT_FALSE(v.refusal.empty());
   for (const char* part : {"inverted", "0.04073", "0.04 ", "candidates exhausted", "-0.607", "-0.656", "0.0914",
                            "\"fit_target\": \"potential\"", "log-kernel"})
@@ -37,26 +38,18 @@ TEST(MonopoleStart, AnInvertedStartIsRefusedWithTheResidualAndWhatToDo) {
 // The tooth's 1 - P start on the unit box (issue 29): upright by the medians, but the optimizer
 // collapsed from it to an empty set.
 TEST(MonopoleStart, AStartThatBarelyOverlapsTheShapeIsWarnedOf) {
-  monopole::StartCheck start;
-  start.median_inside = -0.36;
-  start.median_outside = -0.22;
-  start.iou = 0.108;
-  const MonopoleStartVerdict v =
-      JudgeMonopoleStart(Fit(0.041, monopole::FitStop::kCandidatesExhausted), 0.04, 100000, start);
+  const monopole::StartCheck start{.median_inside = -0.36, .median_outside = -0.22, .iou = 0.108};
+  const MonopoleStartVerdict v = Judge(0.041, monopole::FitStop::kCandidatesExhausted, start);
   EXPECT_TRUE(v.refusal.empty());
   for (const char* part : {"0.041", "--candidates", "IoU 0.108", "empty set", "potential"})
     EXPECT_NE(v.warning.find(part), std::string::npos) << part << " in: " << v.warning;
 }
 
 TEST(MonopoleStart, AnUprightConvergedStartPassesAndAnUnconvergedOneIsWarnedOf) {
-  monopole::StartCheck start;
-  start.median_inside = -1.4;
-  start.median_outside = -0.19;
-  start.iou = 0.28;
-  EXPECT_TRUE(JudgeMonopoleStart(Fit(0.0396, monopole::FitStop::kConverged), 0.04, 100000, start).refusal.empty());
-  EXPECT_TRUE(JudgeMonopoleStart(Fit(0.0396, monopole::FitStop::kConverged), 0.04, 100000, start).warning.empty());
-  const MonopoleStartVerdict v =
-      JudgeMonopoleStart(Fit(0.05, monopole::FitStop::kMaxMonopoles), 0.04, 100000, start);
+  const monopole::StartCheck start{.median_inside = -1.4, .median_outside = -0.19, .iou = 0.28};
+  EXPECT_TRUE(Judge(0.0396, monopole::FitStop::kConverged, start).refusal.empty());
+  EXPECT_TRUE(Judge(0.0396, monopole::FitStop::kConverged, start).warning.empty());
+  const MonopoleStartVerdict v = Judge(0.05, monopole::FitStop::kMaxMonopoles, start);
   EXPECT_TRUE(v.refusal.empty());
   EXPECT_NE(v.warning.find("0.05"), std::string::npos) << v.warning;
   EXPECT_NE(v.warning.find("max_monopoles reached"), std::string::npos) << v.warning;

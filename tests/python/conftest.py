@@ -14,6 +14,17 @@ import pytest
 SOURCE_DIR = pathlib.Path(os.environ.get("QUIJIBO_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
 BINARY = pathlib.Path(os.environ.get("QUIJIBO_BINARY", SOURCE_DIR / "build" / "experiments" / "quijibo"))
 
+# A whole experiment that runs in seconds: a sphere on 12^3 cells, a random 5 + 4 root map, a short
+# schedule, a coarse mesh and no pictures (`quijibo run` and quijibo.run read it alike).
+TINY_EXPERIMENT = {
+    "name": "tiny",
+    "target": {"analytic": "sphere", "resolution": 12},
+    "initial": {"kind": "random", "top": 5, "bottom": 4},
+    "optimizer": {"schedule": "12(VF)", "max_iterations": {"V": 5, "F": 10}},
+    "mesh": {"resolution": 24, "iterations": 2, "vdb": False},
+    "pictures": {"enabled": False},
+}
+
 
 def run_cli(*args, check=True):
     """Runs `quijibo --quiet <args>`; returns the CompletedProcess (text)."""

@@ -5,21 +5,12 @@ import subprocess
 import sys
 
 import quijibo
-from conftest import SOURCE_DIR, run_cli
-
-TINY = {
-    "name": "tiny",
-    "target": {"analytic": "sphere", "resolution": 12},
-    "initial": {"kind": "random", "top": 5, "bottom": 4},
-    "optimizer": {"schedule": "12(VF)", "max_iterations": {"V": 5, "F": 10}},
-    "mesh": {"resolution": 24, "iterations": 2, "vdb": False},
-    "pictures": {"enabled": False},
-}
+from conftest import SOURCE_DIR, TINY_EXPERIMENT, run_cli
 
 
 def test_notebook_plots_and_remeshes(tmp_path):
     experiment = tmp_path / "tiny.json"
-    experiment.write_text(json.dumps(TINY))
+    experiment.write_text(json.dumps(TINY_EXPERIMENT))
     results = tmp_path / "results"
     run_cli("run", experiment, "--out", results)
     out = tmp_path / "notebook"

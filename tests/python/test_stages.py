@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import quijibo
-from conftest import SOURCE_DIR, cli_json, run_cli
+from conftest import SOURCE_DIR, TINY_EXPERIMENT, cli_json, run_cli
 
 BUNNY = SOURCE_DIR / "data" / "bunny.obj"
 
@@ -53,27 +53,18 @@ def test_modulus_and_portal_equal_the_commands(tmp_path):
     assert (tmp_path / "k-cli.png").read_bytes() == (tmp_path / "k.png").read_bytes()
 
 
-TINY = {
-    "name": "tiny",
-    "target": {"analytic": "sphere", "resolution": 12},
-    "initial": {"kind": "random", "top": 5, "bottom": 4},
-    "optimizer": {"schedule": "12(VF)", "max_iterations": {"V": 5, "F": 10}},
-    "mesh": {"resolution": 24, "iterations": 2, "vdb": False},
-    "pictures": {"enabled": False},
-}
-
-
 def test_run_equals_quijibo_run(tmp_path):
     path = tmp_path / "tiny.json"
-    path.write_text(json.dumps(TINY))
+    path.write_text(json.dumps(TINY_EXPERIMENT))
     summary = quijibo.run(str(path), out=str(tmp_path / "py"), quiet=True)
     assert {s["status"] for s in summary["stages"]} == {"ran"}
     run_cli("run", path, "--out", tmp_path / "cli")
     for f in ("optimized/map.json", "initial/map.json"):
         assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
-    again = quijibo.run(TINY, out=str(tmp_path / "py"), quiet=True)  # the document itself: every stage reused
+    # The document itself: every stage reused.
+    again = quijibo.run(TINY_EXPERIMENT, out=str(tmp_path / "py"), quiet=True)
     assert {s["status"] for s in again["stages"]} == {"reused"}
-    assert quijibo.run(TINY, check=True)["resolved"]["optimizer"][0]["schedule"]
-    bad = dict(TINY, mesh={"resolutoin": 24})
+    assert quijibo.run(TINY_EXPERIMENT, check=True)["resolved"]["optimizer"][0]["schedule"]
+    bad = dict(TINY_EXPERIMENT, mesh={"resolutoin": 24})
     with pytest.raises(quijibo.Error, match=r'experiment: /mesh/resolutoin: unknown key'):
         quijibo.run(bad, check=True)
