@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <random>
+#include <vector>
 
 #include "quijibo/quaternion.h"
 
@@ -25,10 +27,15 @@ Real Dist(const Quaternion<Real>& a, const Quaternion<Real>& b) {
   return (a - b).norm() / std::max(Real(1), b.norm());
 }
 
+// `count` quaternions with components uniform in [-2, 2), drawn in order from a generator seeded
+// with `seed`.
 template <class Real>
-Quaternion<Real> Random(std::mt19937_64& rng) {
+std::vector<Quaternion<Real>> RandomQuaternions(std::uint64_t seed, int count) {
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-2, 2);
-  return {Real(u(rng)), Real(u(rng)), Real(u(rng)), Real(u(rng))};
+  std::vector<Quaternion<Real>> q(count);
+  for (auto& x : q) x = {Real(u(rng)), Real(u(rng)), Real(u(rng)), Real(u(rng))};
+  return q;
 }
 
 TYPED_TEST(QuaternionTest, ProductIsHamiltonAndNormIsMultiplicative) {
@@ -39,9 +46,9 @@ TYPED_TEST(QuaternionTest, ProductIsHamiltonAndNormIsMultiplicative) {
   EXPECT_EQ(j * i, -k);
   EXPECT_EQ(i * i, m1);
   EXPECT_EQ(i * j * k, m1);
-  std::mt19937_64 rng(7);
+  const std::vector<Q> q = RandomQuaternions<Real>(7, 3 * 50);
   for (int n = 0; n < 50; ++n) {
-    const Q a = Random<Real>(rng), b = Random<Real>(rng), c = Random<Real>(rng);
+    const Q &a = q[3 * n], &b = q[3 * n + 1], &c = q[3 * n + 2];
     EXPECT_LE(abs((a * b).norm() - a.norm() * b.norm()), Tol<Real>() * 16);
     EXPECT_LE(Dist((a * b) * c, a * (b * c)), Tol<Real>() * 16);
     EXPECT_LE(Dist(a * a.inverse(), Q(1, 0, 0, 0)), Tol<Real>() * 4);
@@ -52,11 +59,7 @@ TYPED_TEST(QuaternionTest, ProductIsHamiltonAndNormIsMultiplicative) {
 TYPED_TEST(QuaternionTest, ExpInvertsLog) {
   using Real = TypeParam;
   using Q = Quaternion<Real>;
-  std::mt19937_64 rng(11);
-  for (int n = 0; n < 50; ++n) {
-    const Q a = Random<Real>(rng);
-    EXPECT_LE(Dist(exp(log(a)), a), Tol<Real>() * 16);
-  }
+  for (const Q& a : RandomQuaternions<Real>(11, 50)) EXPECT_LE(Dist(exp(log(a)), a), Tol<Real>() * 16);
   // Negative reals: log has angle pi about the i axis, so exp(log) still inverts it.
   const Q neg(-2, 0, 0, 0);
   EXPECT_LE(Dist(exp(log(neg)), neg), Tol<Real>() * 16);
@@ -65,9 +68,9 @@ TYPED_TEST(QuaternionTest, ExpInvertsLog) {
 TYPED_TEST(QuaternionTest, PowerIsRightForEveryExponentSign) {
   using Real = TypeParam;
   using Q = Quaternion<Real>;
-  std::mt19937_64 rng(3);
+  const std::vector<Q> q = RandomQuaternions<Real>(3, 30);
   for (int n = 0; n < 30; ++n) {
-    const Q a = Random<Real>(rng);
+    const Q& a = q[n];
     // Integer powers against repeated products, both signs.
     EXPECT_LE(Dist(pow(a, Real(3)), a * a * a), Tol<Real>() * 64);
     EXPECT_LE(Dist(pow(a, Real(-2)), (a * a).inverse()), Tol<Real>() * 64);
@@ -92,9 +95,9 @@ namespace {
 TYPED_TEST(QuaternionTest, FusedLogAndPowerMatchesLogAndPow) {
   using Real = TypeParam;
   using Q = Quaternion<Real>;
-  std::mt19937_64 rng(5);
+  const std::vector<Q> q = RandomQuaternions<Real>(5, 30);
   for (int n = 0; n < 30; ++n) {
-    const Q d = Random<Real>(rng);
+    const Q& d = q[n];
     const Real a = Real(-2.5 + 0.2 * n);
     Q lg, p;
     LogAndPower(d, a, lg, p);
