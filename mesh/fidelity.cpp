@@ -158,6 +158,41 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
   return f;
 }
 
+nlohmann::json NodeFit::ToJson() const {
+  return {{"on_nodes_iou", on_nodes}, {"between_nodes_iou", between_nodes}, {"nodes", nodes}, {"corners", corners}};
+}
+
+NodeFit MeasureNodeFit(const RationalMap& map, const ScalarGrid& target) {
+  const GridFrame& g = target.frame;
+  NodeFit fit;
+  std::int64_t inter = 0, uni = 0;
+  const std::int64_t cells = g.cell_count();
+#pragma omp parallel for schedule(static) reduction(+ : inter, uni)
+  for (std::int64_t c = 0; c < cells; ++c) {
+    const double L = OneStepLogModulus(map, g.cell_center(c));
+    const bool in = target.values[std::size_t(c)] < 0, set = !std::isnan(L) && L < 0;
+    inter += in && set, uni += in || set;
+  }
+  fit.nodes = cells;
+  fit.on_nodes = IntersectionOverUnion(inter, uni);
+  // Interior corners: (i + 1) spacing from the min corner, i in [0, dims - 2].
+  const std::int64_t cx = std::max(g.dims[0] - 1, 0), cy = std::max(g.dims[1] - 1, 0), cz = std::max(g.dims[2] - 1, 0);
+  const std::int64_t corners = cx * cy * cz;
+  inter = 0, uni = 0;
+#pragma omp parallel for schedule(static) reduction(+ : inter, uni)
+  for (std::int64_t c = 0; c < corners; ++c) {
+    const std::int64_t i = c % cx, j = (c / cx) % cy, k = c / (cx * cy);
+    const Vec3 p{g.min_corner[0] + g.spacing * double(i + 1), g.min_corner[1] + g.spacing * double(j + 1),
+                 g.min_corner[2] + g.spacing * double(k + 1)};
+    const double L = OneStepLogModulus(map, p);
+    const bool in = target.sample(p) < 0, set = !std::isnan(L) && L < 0;
+    inter += in && set, uni += in || set;
+  }
+  fit.corners = corners;
+  fit.between_nodes = IntersectionOverUnion(inter, uni);
+  return fit;
+}
+
 nlohmann::json MeshDetail::ToJson() const {
   nlohmann::json j = {{"area", area}, {"components", components}, {"box_dimension", dimension}, {"box_counts", box_counts}};
   if (area_ratio >= 0) j["area_ratio"] = area_ratio;

@@ -64,6 +64,18 @@ struct Fidelity {
 // The lattice figures of `map` against the target grid `target` (both in the fractal frame).
 Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& options = {});
 
+// The one-step fit at the target grid's nodes and between them: the IoU of {L < 0} and {phi < 0}
+// at the cell centres of `target` (the points the energy fits) and at its interior cell corners
+// (each the centre of eight cells, phi trilinear there). The energy sees only the nodes, so a fit
+// whose thin parts pass through them and narrow in between (beads along a wall two or three cells
+// thick) scores well on the nodes and markedly worse between them; a faithful fit scores alike.
+struct NodeFit {
+  double on_nodes = 0, between_nodes = 0;
+  std::int64_t nodes = 0, corners = 0;
+  nlohmann::json ToJson() const;
+};
+NodeFit MeasureNodeFit(const RationalMap& map, const ScalarGrid& target);
+
 // How much detail a meshed set has (see the header comment).
 struct MeshDetail {
   double area = 0;              // of the mesh

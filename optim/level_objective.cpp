@@ -68,23 +68,56 @@ class CachedEvaluator : public LevelEvaluator<Scalar> {
 
 }  // namespace
 
+// The evaluator of `grid` by `evaluator`: over `shared` (the absolute energy's, with its band
+// `blocks`) when not null, else over a log-linear energy of its own kept in `own`.
+template <class Scalar>
+std::unique_ptr<LevelEvaluator<Scalar>> MakeEvaluator(const RationalMap& map, const EnergyGrid& grid,
+                                                      const std::string& evaluator, const EnergyOptions& energy,
+                                                      const LogLinearOptions& loglinear, LogLinearEnergy* shared,
+                                                      std::shared_ptr<const BandBlocks> blocks,
+                                                      std::unique_ptr<LogLinearEnergy>& own) {
+  if constexpr (std::is_same_v<Scalar, double>) {
+    if (evaluator == "band" || evaluator == "dense") {
+      if (!shared) own = std::make_unique<LogLinearEnergy>(map, grid, energy, loglinear);
+      LogLinearEnergy* e = shared ? shared : own.get();
+      if (evaluator == "band") return std::make_unique<BandEvaluator>(e, shared ? std::move(blocks) : nullptr);
+      return std::make_unique<DenseEvaluator>(e);
+    }
+  }
+  return std::make_unique<CachedEvaluator<Scalar>>(map, grid, energy);
+}
+
 template <class Scalar>
 LevelObjective<Scalar>::LevelObjective(PassWeights& weights, const RationalMap& map, int resolution,
                                        LevelWeights level_weights, const std::string& evaluator,
                                        const EnergyOptions& energy, const LogLinearOptions& loglinear)
-    : weights_(weights), resolution_(resolution), grid_(weights.Level(resolution, level_weights)) {
-  if constexpr (std::is_same_v<Scalar, double>) {
-    if (evaluator == "band" || evaluator == "dense") {
-      share_ = grid_.frame == weights.finest().frame;
-      if (!share_) level_energy_ = std::make_unique<LogLinearEnergy>(map, grid_, energy, loglinear);
-      LogLinearEnergy* e = share_ ? &weights.absolute_evaluator() : level_energy_.get();
-      if (evaluator == "band")
-        evaluator_ = std::make_unique<BandEvaluator>(e, share_ ? weights.absolute_blocks() : nullptr);
-      else
-        evaluator_ = std::make_unique<DenseEvaluator>(e);
-    }
-  }
-  if (!evaluator_) evaluator_ = std::make_unique<CachedEvaluator<Scalar>>(map, grid_, energy);
+    : weights_(weights),
+      resolution_(resolution),
+      grid_(weights.Level(resolution, level_weights)),
+      corners_(weights.between_nodes() ? weights.Corners(grid_) : EnergyGrid{}) {
+  const bool loglinear_evaluator = std::is_same_v<Scalar, double> && (evaluator == "band" || evaluator == "dense");
+  share_ = loglinear_evaluator && grid_.frame == weights.finest().frame;
+  evaluator_ = MakeEvaluator<Scalar>(map, grid_, evaluator, energy, loglinear,
+                                     share_ ? &weights.absolute_evaluator() : nullptr,
+                                     share_ ? weights.absolute_blocks() : nullptr, level_energy_);
+  if (weights.between_nodes())
+    corner_evaluator_ = MakeEvaluator<Scalar>(map, corners_, evaluator, energy, loglinear,
+                                              share_ ? &weights.absolute_corners_evaluator() : nullptr,
+                                              share_ ? weights.absolute_corners_blocks() : nullptr, corner_energy_);
+}
+
+template <class Scalar>
+Evaluation<Scalar> LevelObjective<Scalar>::Evaluate(const Vector& x) {
+  Evaluation<Scalar> e = evaluator_->Evaluate(x, mode_);
+  if (!corner_evaluator_) return e;
+  const Evaluation<Scalar> c = corner_evaluator_->Evaluate(x, mode_);
+  e.energy += c.energy;
+  if (e.gradient.size() == c.gradient.size()) e.gradient += c.gradient;
+  e.counts.cells += c.counts.cells;
+  e.counts.singular += c.counts.singular;
+  e.counts.overflowed += c.counts.overflowed;
+  e.seconds += c.seconds;
+  return e;
 }
 
 template <class Scalar>
@@ -94,11 +127,18 @@ LevelObjective<Scalar>::~LevelObjective() {
 
 template <class Scalar>
 void LevelObjective<Scalar>::BeginPass(PassKind kind, const Vector& pass_start, const Vector& x) {
+  PassWeights::SetWeights set_corners;
+  if (corner_evaluator_)
+    set_corners = [this](const std::vector<double>& w, double eta) { corner_evaluator_->SetWeights(w, eta); };
   weights_.BeginPass(kind, resolution_, grid_, pass_start.template cast<double>(),
-                     [this](const std::vector<double>& w, double eta) { evaluator_->SetWeights(w, eta); }, share_);
-  evaluator_->BeginPass();
+                     [this](const std::vector<double>& w, double eta) { evaluator_->SetWeights(w, eta); }, share_,
+                     corner_evaluator_ ? &corners_ : nullptr, std::move(set_corners));
   mode_ = kind == PassKind::kVariable ? EnergyMode::kVariable : EnergyMode::kFull;
-  if (kind == PassKind::kVariable) evaluator_->BeginVariablePass(x);
+  for (LevelEvaluator<Scalar>* e : {evaluator_.get(), corner_evaluator_.get()}) {
+    if (!e) continue;
+    e->BeginPass();
+    if (kind == PassKind::kVariable) e->BeginVariablePass(x);
+  }
 }
 
 template class LevelObjective<float>;

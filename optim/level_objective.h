@@ -52,16 +52,18 @@ class LevelObjective {
   // The pass's minimization is over (the absolute energy no longer gives its weights back).
   void EndPass() { weights_.EndPass(); }
   EnergyMode mode() const { return mode_; }
-  Evaluation<Scalar> Evaluate(const Vector& x) { return evaluator_->Evaluate(x, mode_); }
+  // psi on the level's grid (and, with between_nodes, on its corner twin: the sum).
+  Evaluation<Scalar> Evaluate(const Vector& x);
   nlohmann::json PassReport(const Vector& x, Scalar energy) { return evaluator_->PassReport(x, mode_, energy); }
 
  private:
   PassWeights& weights_;
   int resolution_;
   const EnergyGrid grid_;  // its address is the pass's (PassWeights keeps a pointer)
+  const EnergyGrid corners_;  // between_nodes: the corner twin of grid_ (else empty)
   bool share_ = false;
-  std::unique_ptr<LogLinearEnergy> level_energy_;
-  std::unique_ptr<LevelEvaluator<Scalar>> evaluator_;
+  std::unique_ptr<LogLinearEnergy> level_energy_, corner_energy_;
+  std::unique_ptr<LevelEvaluator<Scalar>> evaluator_, corner_evaluator_;
   EnergyMode mode_ = EnergyMode::kFull;
 };
 

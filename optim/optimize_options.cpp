@@ -123,6 +123,14 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
           .Doc("each level runs at the smallest resolution (from its scheduled one up to the finest) whose grid "
                "represents the target with at least this IoU; 0: the schedule as written, the paper's "
                "([fidelity.md](fidelity.md) §6)")
+          .Boolean(
+              "between_nodes", "--between-nodes",
+              "Also fit every level's cell corners (a staggered twin of its grid): thin walls cannot pass through "
+              "the nodes and narrow between them; about twice the work",
+              [](auto& o) -> bool& { return o.between_nodes; })
+          .Doc("the energy also on every level's interior cell corners, a staggered twin of its grid (ψ is the sum "
+               "over both): a fit whose walls two or three cells thin pass through the nodes and narrow between "
+               "them pays for it; about twice the work ([fidelity.md](fidelity.md))")
           .Number(
               "alpha", "--alpha", "Sharpness of tanh", [](auto& o) -> double& { return o.energy.alpha; },
               EnergyOptions::kAlphaRange)

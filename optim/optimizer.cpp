@@ -154,7 +154,7 @@ class Runner {
     // absolute energy's too, where not stored), which need only the rows near the surface.
     loglinear_ = o_.loglinear();
     loglinear_.band = evaluator_ != "dense";
-    weights_.emplace(sdf_, o_.weights, map_, o_.energy, loglinear_);
+    weights_.emplace(sdf_, o_.weights, map_, o_.energy, loglinear_, o_.between_nodes);
     ResolveLevels();
     if (!o_.resume) NotifyRunStart();
 

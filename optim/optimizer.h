@@ -83,6 +83,10 @@ struct OptimizeOptions {
   // IoU >= 0.8): a level that cannot reach it itself cannot lead there. 0: the schedule as written
   // (the paper, the reference code).
   double min_level_fidelity = 0.8;
+  // The energy also on every level's interior cell corners (CornerGrid): a fit whose thin walls
+  // pass through the grid's nodes and narrow between them (docs/fidelity.md) pays for it. About
+  // twice the work of a pass and of the absolute energy.
+  bool between_nodes = false;
   // The log-linear evaluator's log-distance storage and, for kAuto, the finest level's budget
   // (kept in GB, the setting's unit, so that the JSON value reads back exactly).
   LogLinearOptions::Storage storage = LogLinearOptions{}.storage;

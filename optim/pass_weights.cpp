@@ -5,13 +5,19 @@
 namespace quijibo::optim {
 
 PassWeights::PassWeights(const ScalarGrid& sdf, WeightField field, const RationalMap& map,
-                         const EnergyOptions& energy, const LogLinearOptions& loglinear)
+                         const EnergyOptions& energy, const LogLinearOptions& loglinear, bool between_nodes)
     : sdf_(sdf),
       field_(field),
       finest_w_(ComputeWeights(sdf, field)),
       finest_(MakeEnergyGrid(sdf, finest_w_, field, 0, LevelWeights::kSampleFinest, 0.0)),
       absolute_(map, finest_, energy, loglinear) {
   if (absolute_.storage() == LogLinearOptions::Storage::kOnTheFly) absolute_band_ = std::make_unique<BandEnergy>(&absolute_);
+  if (between_nodes) {
+    finest_corners_ = CornerGrid(sdf, field, finest_);
+    corners_absolute_ = std::make_unique<LogLinearEnergy>(map, finest_corners_, energy, loglinear);
+    if (corners_absolute_->storage() == LogLinearOptions::Storage::kOnTheFly)
+      corners_band_ = std::make_unique<BandEnergy>(corners_absolute_.get());
+  }
 }
 
 EnergyGrid PassWeights::Level(int resolution, LevelWeights level_weights) const {
@@ -19,8 +25,9 @@ EnergyGrid PassWeights::Level(int resolution, LevelWeights level_weights) const 
 }
 
 void PassWeights::BeginPass(PassKind kind, int resolution, const EnergyGrid& level, const Eigen::VectorXd& start,
-                            SetWeights set, bool shared) {
+                            SetWeights set, bool shared, const EnergyGrid* level_corners, SetWeights set_corners) {
   pass_ = &level;
+  pass_corners_ = between_nodes() ? level_corners : nullptr;
   if (kind == PassKind::kReweighted) {
     // The rule reads only the sign of L, which the band's blocks give without a dense sweep.
     const std::vector<double> rw = ReweightedWeights(
@@ -29,15 +36,28 @@ void PassWeights::BeginPass(PassKind kind, int resolution, const EnergyGrid& lev
     pass_ = &reweighted_;
   }
   set_ = std::move(set);
+  set_corners_ = std::move(set_corners);
   shared_ = shared;
-  set_(pass_->weight, pass_->eta);
+  GiveBack();
+}
+
+void PassWeights::GiveBack() {
+  const double eta = pass_->eta + (pass_corners_ ? pass_corners_->eta : 0.0);
+  set_(pass_->weight, eta);
+  if (pass_corners_ && set_corners_) set_corners_(pass_corners_->weight, eta);
 }
 
 double PassWeights::Absolute(const Eigen::VectorXd& x) {
-  absolute_.SetWeights(finest_.weight, finest_.eta);
-  const double psi = absolute_band_ ? absolute_band_->EvaluateOnce(x).energy
-                                    : absolute_.Evaluate(x, EnergyMode::kFull, false).energy;
-  if (shared_ && pass_) set_(pass_->weight, pass_->eta);
+  const double eta = finest_.eta + (corners_absolute_ ? finest_corners_.eta : 0.0);
+  absolute_.SetWeights(finest_.weight, eta);
+  double psi = absolute_band_ ? absolute_band_->EvaluateOnce(x).energy
+                              : absolute_.Evaluate(x, EnergyMode::kFull, false).energy;
+  if (corners_absolute_) {
+    corners_absolute_->SetWeights(finest_corners_.weight, eta);
+    psi += corners_band_ ? corners_band_->EvaluateOnce(x).energy
+                         : corners_absolute_->Evaluate(x, EnergyMode::kFull, false).energy;
+  }
+  if (shared_ && pass_ && set_) GiveBack();
   return psi;
 }
 

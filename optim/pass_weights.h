@@ -4,11 +4,15 @@
 // which the finest level's log-linear passes share: after an absolute evaluation the pass's
 // weights are given back. When the finest grid's log-distances are not stored (on-the-fly: grids
 // beyond ~100^3), the absolute energy goes through a narrow band over blocks (band_energy.h): exact,
-// without a dense sweep. Internal to optim/.
+// without a dense sweep. With `between_nodes` every grid has a twin of its interior cell corners
+// (CornerGrid, quijibo/target.h) and psi is the sum over both, each term divided by the sum of the
+// two grids' eta; an R pass reweights the nodes only (the rule reads L on the finest grid's
+// nodes), the corners keep their weights. Internal to optim/.
 #pragma once
 
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "optim/schedule.h"
@@ -24,7 +28,7 @@ class PassWeights {
  public:
   using SetWeights = std::function<void(const std::vector<double>& weight, double eta)>;
   PassWeights(const ScalarGrid& sdf, WeightField field, const RationalMap& map, const EnergyOptions& energy,
-              const LogLinearOptions& loglinear);
+              const LogLinearOptions& loglinear, bool between_nodes = false);
 
   const EnergyGrid& finest() const { return finest_; }
   const std::vector<double>& finest_weight() const { return finest_w_; }
@@ -33,17 +37,29 @@ class PassWeights {
   std::shared_ptr<const BandBlocks> absolute_blocks() const {
     return absolute_band_ ? absolute_band_->blocks() : nullptr;
   }
+  bool between_nodes() const { return corners_absolute_ != nullptr; }
+  // The finest grid's corner twin and its absolute evaluator and blocks (between_nodes() only).
+  const EnergyGrid& finest_corners() const { return finest_corners_; }
+  LogLinearEnergy& absolute_corners_evaluator() { return *corners_absolute_; }
+  std::shared_ptr<const BandBlocks> absolute_corners_blocks() const {
+    return corners_band_ ? corners_band_->blocks() : nullptr;
+  }
+  // The corner twin of a level's grid.
+  EnergyGrid Corners(const EnergyGrid& level) const { return CornerGrid(sdf_, field_, level); }
   // A level's grid and weights (coarse levels sample or recompute the finest W).
   EnergyGrid Level(int resolution, LevelWeights level_weights) const;
 
   // Starts a pass of `kind` at `resolution` from `start`: hands its weights to `set` now, and
-  // again after each Absolute when `shared` (the pass evaluates with absolute_evaluator()).
+  // again after each Absolute when `shared` (the pass evaluates with absolute_evaluator()). With
+  // between_nodes(), `level_corners` is the level's corner twin and `set_corners` takes its weights
+  // (the absolute's corner evaluator is shared when `shared`).
   void BeginPass(PassKind kind, int resolution, const EnergyGrid& level, const Eigen::VectorXd& start,
-                 SetWeights set, bool shared);
+                 SetWeights set, bool shared, const EnergyGrid* level_corners = nullptr, SetWeights set_corners = nullptr);
   // The pass's minimization is over: Absolute no longer hands its weights back.
   void EndPass() {
     shared_ = false;
     set_ = nullptr;
+    set_corners_ = nullptr;
   }
   // psi of x on the finest grid with the original weights.
   double Absolute(const Eigen::VectorXd& x);
@@ -59,6 +75,14 @@ class PassWeights {
   const EnergyGrid* pass_ = nullptr;
   SetWeights set_;
   bool shared_ = false;
+  // between_nodes: the corner twins of the finest grid and of the pass's grid.
+  EnergyGrid finest_corners_;
+  std::unique_ptr<LogLinearEnergy> corners_absolute_;
+  std::unique_ptr<BandEnergy> corners_band_;
+  const EnergyGrid* pass_corners_ = nullptr;
+  SetWeights set_corners_;
+  // Hands the pass's weights to its evaluators, each divided by both grids' eta.
+  void GiveBack();
 };
 
 }  // namespace quijibo::optim

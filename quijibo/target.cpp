@@ -227,6 +227,26 @@ EnergyGrid MakeEnergyGrid(const ScalarGrid& sdf, const std::vector<double>& fine
   return g;
 }
 
+EnergyGrid CornerGrid(const ScalarGrid& sdf, WeightField field, const EnergyGrid& level) {
+  EnergyGrid g;
+  g.slice = level.slice;
+  g.frame = level.frame;
+  for (int a = 0; a < 3; ++a) {
+    if (level.frame.dims[a] < 2) throw Error("a level needs two cells along every axis to have interior corners");
+    g.frame.dims[a] = level.frame.dims[a] - 1;
+    g.frame.min_corner[a] = level.frame.min_corner[a] + 0.5 * level.frame.spacing;
+  }
+  ScalarGrid corners{g.frame, {}, "signed-distance", sdf.coordinates};
+  corners.values.resize(std::size_t(g.frame.cell_count()));
+  for (std::int64_t c = 0; c < g.frame.cell_count(); ++c)
+    corners.values[std::size_t(c)] = sdf.sample(g.frame.cell_center(c));
+  g.weight = ComputeWeights(corners, field);
+  g.eta = 0;
+  for (double x : g.weight) g.eta += std::abs(x);
+  if (!(g.eta > 0)) throw Error("the weight field vanishes on this level's corners");
+  return g;
+}
+
 double LevelFidelity(const EnergyGrid& finest, const EnergyGrid& level) {
   const GridFrame& f = finest.frame;
   const GridFrame& l = level.frame;

@@ -68,6 +68,15 @@ EnergyGrid MakeEnergyGrid(const ScalarGrid& sdf, WeightField field, int n = 0,
 EnergyGrid MakeEnergyGrid(const ScalarGrid& sdf, const std::vector<double>& finest_weight,
                           WeightField field, int n, LevelWeights level_weights, double slice);
 
+// The interior cell corners of `level` as a grid of their own (each corner the centre of eight of
+// the level's cells: dims - 1 cells per axis, shifted by half a cell), its weights those of `field`
+// computed from `sdf` sampled trilinearly at the corners (sampling the nodes' weights instead
+// would give the corners beside a thin wall, between an inside and an outside node, weights near
+// 0: no say where it matters), eta their sum of |W|. The energy on both grids sees what a fit does
+// between the level's nodes as well as on them (optim's `between_nodes`). Throws quijibo::Error
+// when the level has fewer than two cells along an axis.
+EnergyGrid CornerGrid(const ScalarGrid& sdf, WeightField field, const EnergyGrid& level);
+
 // How well a level represents the target, in [0, 1]: the IoU between the finest grid's inside
 // (W < 0 on `finest`) and the level's inside as the finest cells see it (each finest cell takes
 // the sign of W on the `level` cell that contains its centre). 1 on the finest grid itself. A

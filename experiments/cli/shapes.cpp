@@ -15,6 +15,7 @@
 #include "mesh/fidelity.h"
 #include "mesh/sdf_command.h"
 #include "mesh/triangle_mesh.h"
+#include "optim/optimizer.h"
 #include "util/child_process.h"
 #include "util/error.h"
 #include "util/io.h"
@@ -65,9 +66,12 @@ json Measure(const FidelityArgs& a) {
     // The shape box's side in the meshes' (user) frame: the boxes of the box-counting dimension.
     const double side = (1.0 - 2.0 * map.frame.padding) / map.frame.scale;
     j["detail"] = mesh::MeasureMeshDetail(julia, &shape, side).ToJson();
+    j["node_fit"] = mesh::MeasureNodeFit(map, target).ToJson();
     return j;
   }
-  return f.ToJson();
+  json j = f.ToJson();
+  j["node_fit"] = mesh::MeasureNodeFit(map, target).ToJson();
+  return j;
 }
 
 // Runs `quijibo args...` (this executable), stdout and stderr to files; returns the exit code.
@@ -115,6 +119,7 @@ struct ShapeBenchArgs {
   int resolution = kDefaultTargetResolution, mesh_resolution = 128;
   bool initial_only = false, report_only = false;
   mesh::FidelityOptions o;
+  optim::OptimizeOptions optimizer;  // the settings bound below (between_nodes), written into each experiment
 };
 
 // The suite's shapes whose meshes are there (a missing one is skipped with a note), then the
@@ -200,6 +205,7 @@ void MeasureRun(const ShapeBenchArgs& b, const Shape& sh, const fs::path& run, j
   }
   row["optimized"] = f.ToJson();
   if (!detail.is_null()) row["optimized"]["detail"] = detail;
+  row["optimized"]["node_fit"] = mesh::MeasureNodeFit(opt, target).ToJson();
   const json summary = ParseJson(ReadFile((run / "optimized/summary.json").string()), "summary.json");
   row["psi_start"] = summary.value("absolute_start", 0.0);
   row["psi_end"] = summary.value("absolute_end", 0.0);
@@ -211,7 +217,7 @@ json RunShape(const ShapeBenchArgs& b, const Shape& sh, const fs::path& dir, con
   const json exp = {{"name", sh.name},
                     {"target", {{"mesh", sh.mesh}, {"resolution", b.resolution}, {"box", b.target_box}}},
                     {"initial", {{"kind", b.initializer}}},
-                    {"optimizer", {{"schedule", schedule}, {"absolute_every", 50}}},
+                    {"optimizer", {{"schedule", schedule}, {"absolute_every", 50}, {"between_nodes", b.optimizer.between_nodes}}},
                     {"mesh", {{"resolution", b.mesh_resolution}, {"iterations", b.o.julia.iterations}, {"vdb", false}}},
                     {"pictures", {{"slice_iterations", 1}}}};
   const std::string exp_path = (dir / "experiment.json").string();
@@ -273,15 +279,16 @@ std::string InitialGuessTable(const ShapeBenchArgs& b, const json& results) {
 // --markdown, the picture sheet; under a header line with the date, machine and settings.
 std::string SuiteTable(const ShapeBenchArgs& b, const json& results) {
   std::vector<double> ious;
-  std::string md = "| shape | triangles | roots | start IoU | ψ start → end | one-step IoU | leak | n-step IoU | n-step leak | "
-                   "Chamfer | Hausdorff | area ratio | box dim. | components | time |\n"
-                   "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  std::string md = "| shape | triangles | roots | start IoU | ψ start → end | one-step IoU | leak | grid IoU: nodes / between | "
+                   "n-step IoU | n-step leak | Chamfer | Hausdorff | area ratio | box dim. | components | time |\n"
+                   "|---|---:|---:|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const json& r : results) {
     const json opt = r.value("optimized", json::object());
     md += "| " + r["name"].get<std::string>() + " | " + std::to_string(r.value("triangles", 0)) + " | " +
           std::to_string(r.value("roots", 0)) + " | " + TableFigure(r.value("initial", json::object()), "one_step", "iou") +
           " | " + (r.contains("psi_end") ? F(r["psi_start"], 3) + " → " + F(r["psi_end"], 3) : "–") + " | " +
           TableFigure(opt, "one_step", "iou") + " | " + TableFigure(opt, "one_step", "leak") + " | " +
+          TableFigure(opt, "node_fit", "on_nodes_iou") + " / " + TableFigure(opt, "node_fit", "between_nodes_iou") + " | " +
           TableFigure(opt, "n_step", "iou") + " | " + TableFigure(opt, "n_step", "leak") + " | " +
           (opt.contains("chamfer") ? F(opt["chamfer"], 4) : "–") + " | " +
           (opt.contains("hausdorff") ? F(opt["hausdorff"], 3) : "–") + " | " + TableFigure(opt, "detail", "area_ratio") +
@@ -313,7 +320,8 @@ std::string SuiteTable(const ShapeBenchArgs& b, const json& results) {
   char date[32];
   std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
   const std::string header = "Shape suite, " + std::string(date) + ", " + std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) +
-                             " cores; initializer " + b.initializer + ", schedule `" + b.schedule + "`, target " +
+                             " cores; initializer " + b.initializer + ", schedule `" + b.schedule + "`" +
+                             (b.optimizer.between_nodes ? " with between_nodes" : "") + ", target " +
                              std::to_string(b.resolution) + "³ (" + b.target_box + " box), mesh " +
                              std::to_string(b.mesh_resolution) + "³ n = " + std::to_string(b.o.julia.iterations) +
                              "; lattice " + std::to_string(b.o.lattice) + "³ over the shape box grown " +
@@ -383,6 +391,7 @@ void AddBenchShapesCommand(CLI::App& app) {
   s->add_option("meshes", b->meshes, "More meshes (named by their file)");
   s->add_option("--only", b->only, "Only these shape names (with --report-only: only these rows)");
   s->add_option("--schedule", b->schedule, "The optimizer schedule (notation or JSON file)")->capture_default_str();
+  BindSettings(s, b->optimizer, {"between_nodes"});
   s->add_option("--initializer", b->initializer, "log-kernel or monopoles")
       ->capture_default_str()->check(CLI::IsMember({"log-kernel", "monopoles"}));
   s->add_option("--target-box", b->target_box, "unit or reference (quijibo/frame.h)")

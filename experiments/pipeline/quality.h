@@ -21,6 +21,7 @@ struct QualityThresholds {
   double max_fill = 0.5;       // fraction of the lattice in the n-step set above: it fills the box
   double max_saturated = 0.5;  // fraction of the start's cells with tanh flat above: no gradient
   double max_iou_loss = 0.002;  // one-step IoU on the target grid lost by the optimization above
+  double max_node_gap = 0.05;   // one-step IoU between the target grid's nodes below the nodes' by more
 };
 
 // `x` with `digits` decimals, as report.md writes its figures.

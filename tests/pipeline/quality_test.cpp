@@ -96,6 +96,53 @@ TEST(Quality, MeasureQualityGivesTheChosenMapsIoUOnTheTargetGrid) {
   EXPECT_EQ(j["target_grid"]["resolution"], 24);
 }
 
+// A fit tight at the nodes and loose between them (the chair: 0.8715 on the nodes, 0.632 at the
+// corners) is warned about; a gap within the tolerance is not.
+TEST(Quality, AFitThatNarrowsBetweenTheNodesIsWarnedAbout) {
+  for (const auto& [between, warned] : {std::pair{0.632, true}, std::pair{0.84, false}}) {
+    json f = Fidelity(0.7895, 0.8715);
+    f["target_grid"]["between_nodes_iou"] = between;
+    const std::string dir = FolderWithFidelity("quality_nodes", f);
+    const json q = RunQuality(Experiment{}, dir);
+    EXPECT_EQ(Warns(q, "fits the target grid's nodes (IoU 0.872) but not the space between them (IoU " +
+                           Fixed(between, 3)),
+              warned)
+        << q;
+    EXPECT_NE(QualitySection(q).find("| one-step IoU between the target grid's nodes (cell corners) | " +
+                                      Fixed(between, 4) + " |"),
+              std::string::npos)
+        << QualitySection(q);
+    fs::remove_all(dir);
+  }
+}
+
+// MeasureNodeFit: on the nodes it is CheckStart's IoU; a ball that matches the sphere fits the
+// corners as well as the nodes, a ball too large fits both as badly.
+TEST(Quality, NodeFitMeasuresTheNodesAndTheCorners) {
+  ScalarGrid sphere;
+  sphere.frame = GridFrame::Cube(24, {0.0, 0.0, 0.0}, 3.0);
+  sphere.values.resize(sphere.frame.cell_count());
+  for (std::int64_t c = 0; c < sphere.frame.cell_count(); ++c) {
+    const Vec3 p = sphere.frame.cell_center(c);
+    sphere.values[std::size_t(c)] = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1.0;
+  }
+  auto ball = [](double radius) {
+    RationalMap m;
+    m.top_roots = {Vec4{0.0, 0.0, 0.0, 0.0}};
+    m.top_exponents = {1.0};
+    m.ln_C = -std::log(radius);
+    return m;
+  };
+  const mesh::NodeFit fit = mesh::MeasureNodeFit(ball(1.0), sphere), large = mesh::MeasureNodeFit(ball(1.3), sphere);
+  EXPECT_EQ(fit.on_nodes, monopole::CheckStart(ball(1.0), sphere).iou);
+  EXPECT_EQ(fit.nodes, 24 * 24 * 24);
+  EXPECT_EQ(fit.corners, 23 * 23 * 23);
+  EXPECT_GT(fit.between_nodes, 0.9);
+  EXPECT_NEAR(fit.between_nodes, fit.on_nodes, 0.05);
+  EXPECT_LT(large.on_nodes, 0.6);
+  EXPECT_LT(large.between_nodes, 0.6);
+}
+
 // One IoU for every figure: two empty sets are the same set.
 TEST(Quality, IntersectionOverUnionHasOneConventionForEmptySets) {
   EXPECT_EQ(IntersectionOverUnion(0, 0), 1.0);
