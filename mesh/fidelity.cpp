@@ -159,7 +159,8 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
 }
 
 nlohmann::json NodeFit::ToJson() const {
-  return {{"on_nodes_iou", on_nodes}, {"between_nodes_iou", between_nodes}, {"nodes", nodes}, {"corners", corners}};
+  return {{"on_nodes_iou", on_nodes}, {"between_nodes_iou", between_nodes}, {"nodes", nodes},
+          {"corners", corners}, {"undecided_corners", undecided_corners}};
 }
 
 NodeFit MeasureNodeFit(const RationalMap& map, const ScalarGrid& target) {
@@ -178,17 +179,25 @@ NodeFit MeasureNodeFit(const RationalMap& map, const ScalarGrid& target) {
   // Interior corners: (i + 1) spacing from the min corner, i in [0, dims - 2].
   const std::int64_t cx = std::max(g.dims[0] - 1, 0), cy = std::max(g.dims[1] - 1, 0), cz = std::max(g.dims[2] - 1, 0);
   const std::int64_t corners = cx * cy * cz;
+  const double undecided = 0.25 * g.spacing;
+  std::int64_t skipped = 0;
   inter = 0, uni = 0;
-#pragma omp parallel for schedule(static) reduction(+ : inter, uni)
+#pragma omp parallel for schedule(static) reduction(+ : inter, uni, skipped)
   for (std::int64_t c = 0; c < corners; ++c) {
     const std::int64_t i = c % cx, j = (c / cx) % cy, k = c / (cx * cy);
     const Vec3 p{g.min_corner[0] + g.spacing * double(i + 1), g.min_corner[1] + g.spacing * double(j + 1),
                  g.min_corner[2] + g.spacing * double(k + 1)};
+    const double phi = target.sample(p);
+    if (std::abs(phi) < undecided) {
+      ++skipped;
+      continue;
+    }
     const double L = OneStepLogModulus(map, p);
-    const bool in = target.sample(p) < 0, set = !std::isnan(L) && L < 0;
+    const bool in = phi < 0, set = !std::isnan(L) && L < 0;
     inter += in && set, uni += in || set;
   }
-  fit.corners = corners;
+  fit.corners = corners - skipped;
+  fit.undecided_corners = skipped;
   fit.between_nodes = IntersectionOverUnion(inter, uni);
   return fit;
 }
