@@ -159,29 +159,35 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
 }
 
 nlohmann::json NodeFit::ToJson() const {
-  return {{"on_nodes_iou", on_nodes}, {"between_nodes_iou", between_nodes}, {"nodes", nodes},
-          {"corners", corners}, {"undecided_corners", undecided_corners}};
+  return {{"on_nodes_iou", on_nodes},       {"between_nodes_iou", between_nodes},
+          {"nodes", nodes},                 {"corners", corners},
+          {"undecided_nodes", undecided_nodes}, {"undecided_corners", undecided_corners}};
 }
 
 NodeFit MeasureNodeFit(const RationalMap& map, const ScalarGrid& target) {
   const GridFrame& g = target.frame;
   NodeFit fit;
-  std::int64_t inter = 0, uni = 0;
+  const double undecided = 0.25 * g.spacing;
+  std::int64_t inter = 0, uni = 0, skipped = 0;
   const std::int64_t cells = g.cell_count();
-#pragma omp parallel for schedule(static) reduction(+ : inter, uni)
+#pragma omp parallel for schedule(static) reduction(+ : inter, uni, skipped)
   for (std::int64_t c = 0; c < cells; ++c) {
+    const double phi = target.values[std::size_t(c)];
+    if (std::abs(phi) < undecided) {
+      ++skipped;
+      continue;
+    }
     const double L = OneStepLogModulus(map, g.cell_center(c));
-    const bool in = target.values[std::size_t(c)] < 0, set = !std::isnan(L) && L < 0;
+    const bool in = phi < 0, set = !std::isnan(L) && L < 0;
     inter += in && set, uni += in || set;
   }
-  fit.nodes = cells;
+  fit.nodes = cells - skipped;
+  fit.undecided_nodes = skipped;
   fit.on_nodes = IntersectionOverUnion(inter, uni);
   // Interior corners: (i + 1) spacing from the min corner, i in [0, dims - 2].
   const std::int64_t cx = std::max(g.dims[0] - 1, 0), cy = std::max(g.dims[1] - 1, 0), cz = std::max(g.dims[2] - 1, 0);
   const std::int64_t corners = cx * cy * cz;
-  const double undecided = 0.25 * g.spacing;
-  std::int64_t skipped = 0;
-  inter = 0, uni = 0;
+  skipped = 0, inter = 0, uni = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inter, uni, skipped)
   for (std::int64_t c = 0; c < corners; ++c) {
     const std::int64_t i = c % cx, j = (c / cx) % cy, k = c / (cx * cy);

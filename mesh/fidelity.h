@@ -69,12 +69,14 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
 // (each the centre of eight cells, phi trilinear there). The energy sees only the nodes, so a fit
 // whose thin parts pass through them and narrow in between (beads along a wall two or three cells
 // thick) scores well on the nodes and markedly worse between them; a faithful fit scores alike.
-// Trilinear phi is biased outward on curved surfaces (by about h^2 / 4r at radius r), so corners
-// with |phi| < h / 4 are left undecided and not counted: otherwise the exact set of a sphere
-// eight cells across would score 0.95 between the nodes against 1.00 on them.
+// Trilinear phi is biased outward on curved surfaces (by about h^2 / 4r at radius r), so points
+// with |phi| < h / 4 are left undecided and not counted, corners and nodes alike (the two figures
+// then judge the same kind of point): counting every corner, the exact set of a sphere nine cells
+// across scores 0.95 between the nodes against 1.00 on them. Both figures are therefore higher
+// than CheckStart's IoU on the nodes, which counts every node.
 struct NodeFit {
   double on_nodes = 0, between_nodes = 0;
-  std::int64_t nodes = 0, corners = 0, undecided_corners = 0;
+  std::int64_t nodes = 0, corners = 0, undecided_nodes = 0, undecided_corners = 0;
   nlohmann::json ToJson() const;
 };
 NodeFit MeasureNodeFit(const RationalMap& map, const ScalarGrid& target);

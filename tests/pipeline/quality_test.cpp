@@ -96,19 +96,19 @@ TEST(Quality, MeasureQualityGivesTheChosenMapsIoUOnTheTargetGrid) {
   EXPECT_EQ(j["target_grid"]["resolution"], 24);
 }
 
-// A fit tight at the nodes and loose between them (the chair: 0.8715 on the nodes, 0.632 at the
-// corners) is warned about; a gap within the tolerance is not.
+// A fit tight at the nodes and loose between them (the chair as optimized on the nodes alone) is
+// warned about; a gap within the tolerance is not. Both figures are node_fit's.
 TEST(Quality, AFitThatNarrowsBetweenTheNodesIsWarnedAbout) {
-  for (const auto& [between, warned] : {std::pair{0.632, true}, std::pair{0.84, false}}) {
+  for (const auto& [between, warned] : {std::pair{0.70, true}, std::pair{0.86, false}}) {
     json f = Fidelity(0.7895, 0.8715);
-    f["target_grid"]["between_nodes_iou"] = between;
+    f["target_grid"]["node_fit"] = {{"on_nodes_iou", 0.9}, {"between_nodes_iou", between}};
     const std::string dir = FolderWithFidelity("quality_nodes", f);
     const json q = RunQuality(Experiment{}, dir);
-    EXPECT_EQ(Warns(q, "fits the target grid's nodes (IoU 0.872) but not the space between them (IoU " +
+    EXPECT_EQ(Warns(q, "fits the target grid's nodes (IoU 0.900) but not the space between them (IoU " +
                            Fixed(between, 3)),
               warned)
         << q;
-    EXPECT_NE(QualitySection(q).find("| one-step IoU between the target grid's nodes (cell corners) | " +
+    EXPECT_NE(QualitySection(q).find("on the target grid's nodes / between them (cell corners) | 0.9000 / " +
                                       Fixed(between, 4) + " |"),
               std::string::npos)
         << QualitySection(q);
@@ -139,14 +139,15 @@ RationalMap Ball(double radius) {
 }
 }  // namespace
 
-// MeasureNodeFit: on the nodes it is CheckStart's IoU; a ball that matches the sphere fits the
-// corners as well as the nodes, a ball too large fits both as badly; every interior corner is
-// counted or undecided.
+// MeasureNodeFit: a ball that matches the sphere fits the corners as well as the nodes, a ball too
+// large fits both as badly; every node and interior corner is counted or undecided, and leaving the
+// undecided out only raises the nodes' figure above CheckStart's, which counts them all.
 TEST(Quality, NodeFitMeasuresTheNodesAndTheCorners) {
   const ScalarGrid sphere = UnitSphere(24, 3.0);
   const mesh::NodeFit fit = mesh::MeasureNodeFit(Ball(1.0), sphere), large = mesh::MeasureNodeFit(Ball(1.3), sphere);
-  EXPECT_EQ(fit.on_nodes, monopole::CheckStart(Ball(1.0), sphere).iou);
-  EXPECT_EQ(fit.nodes, 24 * 24 * 24);
+  EXPECT_GE(fit.on_nodes, monopole::CheckStart(Ball(1.0), sphere).iou);
+  EXPECT_EQ(fit.nodes + fit.undecided_nodes, 24 * 24 * 24);
+  EXPECT_GT(fit.undecided_nodes, 0);
   EXPECT_EQ(fit.corners + fit.undecided_corners, 23 * 23 * 23);
   EXPECT_GT(fit.undecided_corners, 0);
   EXPECT_GT(fit.between_nodes, 0.9);
