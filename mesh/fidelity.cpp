@@ -6,6 +6,7 @@
 #include <random>
 #include <unordered_map>
 #include <unordered_set>
+#include <utility>
 
 #include "mesh/sdf.h"
 #include "util/error.h"
@@ -164,47 +165,50 @@ nlohmann::json NodeFit::ToJson() const {
           {"undecided_nodes", undecided_nodes}, {"undecided_corners", undecided_corners}};
 }
 
-NodeFit MeasureNodeFit(const RationalMap& map, const ScalarGrid& target) {
-  const GridFrame& g = target.frame;
-  NodeFit fit;
-  const double undecided = 0.25 * g.spacing;
-  std::int64_t inter = 0, uni = 0, skipped = 0;
-  const std::int64_t cells = g.cell_count();
-#pragma omp parallel for schedule(static) reduction(+ : inter, uni, skipped)
-  for (std::int64_t c = 0; c < cells; ++c) {
-    const double phi = target.values[std::size_t(c)];
+namespace {
+// IoU of {L < 0} and {phi < 0} over points 0..count-1 (at(c) gives the point and phi there),
+// leaving out those with |phi| < undecided; the number left out in `*skipped`.
+template <typename At>
+double DecidedIoU(const RationalMap& map, std::int64_t count, double undecided, At at, std::int64_t* skipped) {
+  std::int64_t inter = 0, uni = 0, left_out = 0;
+#pragma omp parallel for schedule(static) reduction(+ : inter, uni, left_out)
+  for (std::int64_t c = 0; c < count; ++c) {
+    const auto [p, phi] = at(c);
     if (std::abs(phi) < undecided) {
-      ++skipped;
-      continue;
-    }
-    const double L = OneStepLogModulus(map, g.cell_center(c));
-    const bool in = phi < 0, set = !std::isnan(L) && L < 0;
-    inter += in && set, uni += in || set;
-  }
-  fit.nodes = cells - skipped;
-  fit.undecided_nodes = skipped;
-  fit.on_nodes = IntersectionOverUnion(inter, uni);
-  // Interior corners: (i + 1) spacing from the min corner, i in [0, dims - 2].
-  const std::int64_t cx = std::max(g.dims[0] - 1, 0), cy = std::max(g.dims[1] - 1, 0), cz = std::max(g.dims[2] - 1, 0);
-  const std::int64_t corners = cx * cy * cz;
-  skipped = 0, inter = 0, uni = 0;
-#pragma omp parallel for schedule(static) reduction(+ : inter, uni, skipped)
-  for (std::int64_t c = 0; c < corners; ++c) {
-    const std::int64_t i = c % cx, j = (c / cx) % cy, k = c / (cx * cy);
-    const Vec3 p{g.min_corner[0] + g.spacing * double(i + 1), g.min_corner[1] + g.spacing * double(j + 1),
-                 g.min_corner[2] + g.spacing * double(k + 1)};
-    const double phi = target.sample(p);
-    if (std::abs(phi) < undecided) {
-      ++skipped;
+      ++left_out;
       continue;
     }
     const double L = OneStepLogModulus(map, p);
     const bool in = phi < 0, set = !std::isnan(L) && L < 0;
     inter += in && set, uni += in || set;
   }
-  fit.corners = corners - skipped;
-  fit.undecided_corners = skipped;
-  fit.between_nodes = IntersectionOverUnion(inter, uni);
+  *skipped = left_out;
+  return IntersectionOverUnion(inter, uni);
+}
+}  // namespace
+
+NodeFit MeasureNodeFit(const RationalMap& map, const ScalarGrid& target) {
+  const GridFrame& g = target.frame;
+  const double undecided = 0.25 * g.spacing;
+  NodeFit fit;
+  const std::int64_t cells = g.cell_count();
+  fit.on_nodes = DecidedIoU(
+      map, cells, undecided, [&](std::int64_t c) { return std::pair{g.cell_center(c), target.values[std::size_t(c)]}; },
+      &fit.undecided_nodes);
+  fit.nodes = cells - fit.undecided_nodes;
+  // Interior corners: (i + 1) spacing from the min corner, i in [0, dims - 2].
+  const std::int64_t cx = std::max(g.dims[0] - 1, 0), cy = std::max(g.dims[1] - 1, 0), cz = std::max(g.dims[2] - 1, 0);
+  const std::int64_t corners = cx * cy * cz;
+  fit.between_nodes = DecidedIoU(
+      map, corners, undecided,
+      [&](std::int64_t c) {
+        const std::int64_t i = c % cx, j = (c / cx) % cy, k = c / (cx * cy);
+        const Vec3 p{g.min_corner[0] + g.spacing * double(i + 1), g.min_corner[1] + g.spacing * double(j + 1),
+                     g.min_corner[2] + g.spacing * double(k + 1)};
+        return std::pair{p, target.sample(p)};
+      },
+      &fit.undecided_corners);
+  fit.corners = corners - fit.undecided_corners;
   return fit;
 }
 

@@ -52,8 +52,7 @@ json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const
   const monopole::StartCheck c = monopole::CheckStart(chosen, target, alpha);
   j["target_grid"] = {{"resolution", target.frame.dims[0]}, {"start_iou", j["start"].value("iou", 0.0)}, {"iou", c.iou}};
   // ... and between its nodes, where a fit tight only at the nodes shows (docs/fidelity.md).
-  const mesh::NodeFit fit = mesh::MeasureNodeFit(chosen, target);
-  j["target_grid"]["node_fit"] = fit.ToJson();
+  j["target_grid"]["node_fit"] = mesh::MeasureNodeFit(chosen, target).ToJson();
   return j;
 }
 

@@ -64,33 +64,38 @@ TEST(Quality, AGainOrALossWithinTheToleranceIsNotWarnedAbout) {
   }
 }
 
+// The unit sphere's distance on a cube of side `side` with `cells` cells per axis.
+ScalarGrid UnitSphere(int cells, double side) {
+  ScalarGrid sphere;
+  sphere.frame = GridFrame::Cube(cells, {0.0, 0.0, 0.0}, side);
+  sphere.values.resize(sphere.frame.cell_count());
+  for (std::int64_t c = 0; c < sphere.frame.cell_count(); ++c) {
+    const Vec3 p = sphere.frame.cell_center(c);
+    sphere.values[std::size_t(c)] = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1.0;
+  }
+  return sphere;
+}
+
+// R = q / radius: the one-step set is the ball of that radius.
+RationalMap Ball(double radius) {
+  RationalMap m;
+  m.top_roots = {Vec4{0.0, 0.0, 0.0, 0.0}};
+  m.top_exponents = {1.0};
+  m.ln_C = -std::log(radius);
+  return m;
+}
+
 // MeasureQuality states the chosen map's IoU on the target grid beside the start's: a map with a
 // larger one-step ball than the target's sphere scores lower than one that matches it.
 TEST(Quality, MeasureQualityGivesTheChosenMapsIoUOnTheTargetGrid) {
-  ScalarGrid sphere;
-  sphere.frame = GridFrame::Cube(24, {0.0, 0.0, 0.0}, 3.0);
-  sphere.values.resize(sphere.frame.cell_count());
-  for (int k = 0; k < 24; ++k)
-    for (int j = 0; j < 24; ++j)
-      for (int i = 0; i < 24; ++i) {
-        const Vec3 p = sphere.frame.cell_center(i, j, k);
-        sphere.at(i, j, k) = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1.0;
-      }
-  // R = e^C q: the one-step set is the ball of radius e^-C.
-  auto ball = [](double radius) {
-    RationalMap m;
-    m.top_roots = {Vec4{0.0, 0.0, 0.0, 0.0}};
-    m.top_exponents = {1.0};
-    m.ln_C = -std::log(radius);
-    return m;
-  };
+  const ScalarGrid sphere = UnitSphere(24, 3.0);
   JuliaOptions julia;
   julia.iterations = 1;
   QualityOptions options;
   options.lattice = 16;
-  const json j = MeasureQuality(ball(1.0), ball(1.3), sphere, julia, 0.0, 10.0, nullptr, options);
+  const json j = MeasureQuality(Ball(1.0), Ball(1.3), sphere, julia, 0.0, 10.0, nullptr, options);
   const double start = j["target_grid"]["start_iou"], optimized = j["target_grid"]["iou"];
-  EXPECT_EQ(start, monopole::CheckStart(ball(1.0), sphere).iou);
+  EXPECT_EQ(start, monopole::CheckStart(Ball(1.0), sphere).iou);
   EXPECT_GT(start, 0.9);
   EXPECT_LT(optimized, 0.6);  // (1 / 1.3)^3 = 0.455 of the larger ball is the sphere
   EXPECT_EQ(j["target_grid"]["resolution"], 24);
@@ -116,28 +121,6 @@ TEST(Quality, AFitThatNarrowsBetweenTheNodesIsWarnedAbout) {
   }
 }
 
-namespace {
-// The unit sphere's distance on a cube of side `side` with `cells` cells per axis.
-ScalarGrid UnitSphere(int cells, double side) {
-  ScalarGrid sphere;
-  sphere.frame = GridFrame::Cube(cells, {0.0, 0.0, 0.0}, side);
-  sphere.values.resize(sphere.frame.cell_count());
-  for (std::int64_t c = 0; c < sphere.frame.cell_count(); ++c) {
-    const Vec3 p = sphere.frame.cell_center(c);
-    sphere.values[std::size_t(c)] = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1.0;
-  }
-  return sphere;
-}
-
-// R = q / radius: the one-step set is the ball of that radius.
-RationalMap Ball(double radius) {
-  RationalMap m;
-  m.top_roots = {Vec4{0.0, 0.0, 0.0, 0.0}};
-  m.top_exponents = {1.0};
-  m.ln_C = -std::log(radius);
-  return m;
-}
-}  // namespace
 
 // MeasureNodeFit: a ball that matches the sphere fits the corners as well as the nodes, a ball too
 // large fits both as badly; every node and interior corner is counted or undecided, and leaving the
