@@ -12,24 +12,15 @@
 namespace quijibo::optim {
 namespace {
 
-double AbsoluteEnergy(const SmallRun& run, const RationalMap& map, WeightField w) {
-  return LogLinearEnergy(map, MakeEnergyGrid(run.sdf, w)).Evaluate(map.variables(), EnergyMode::kFull, false).energy;
-}
-
 // The Ceres back end (L-BFGS on x = y^2) through the whole optimizer: a two-level schedule with a
 // reweighted pass, checkpoints that restart its memory, exponents kept >= 0, every V and F pass
 // going down, and the result the best absolute energy, below the start.
 TEST(CeresThroughOptimize, RespectsTheBoundsAndLowersTheEnergy) {
   SmallRun run;
-  OptimizeOptions o;
+  OptimizeOptions o = ScheduleAsWritten("10(VFRF)20(VF)", 40, TempDir("ceres"));
   o.backend = "ceres";
   o.weights = WeightField::kLayer;
-  o.schedule = Schedule::Parse("10(VFRF)20(VF)");
-  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
-  for (auto& l : o.schedule.levels)
-    for (auto& p : l.passes) p.max_iterations = 40;
   o.checkpoint_every = 9;
-  o.out_dir = TempDir("ceres");
   const OptimizeSummary s = Optimize(run.sdf, run.map, o);
   ASSERT_TRUE(s.complete);
   ASSERT_EQ(s.passes.size(), 6u);
@@ -48,7 +39,7 @@ TEST(CeresThroughOptimize, RespectsTheBoundsAndLowersTheEnergy) {
   for (double e : run.map.bottom_exponents) EXPECT_GE(e, 0.0);
   EXPECT_GE(run.map.tau, 0.0);
   EXPECT_GE(run.map.beta, 0.0);
-  EXPECT_NEAR(AbsoluteEnergy(run, run.map, WeightField::kLayer), s.absolute_end, 1e-12);
+  EXPECT_NEAR(run.AbsoluteEnergy(run.map, WeightField::kLayer), s.absolute_end, 1e-12);
   std::filesystem::remove_all(o.out_dir);
 }
 
@@ -59,14 +50,10 @@ struct PrecisionResult {
 
 PrecisionResult RunCached(Precision precision, const SmallRun& start) {
   PrecisionResult r{{}, start.map};
-  OptimizeOptions o;
+  OptimizeOptions o = ScheduleAsWritten("8(VF)", 8, TempDir(PrecisionName(precision)));
   o.evaluator = "cached";
   o.precision = precision;
   o.weights = WeightField::kLayer;
-  o.schedule = Schedule::Parse("8(VF)");
-  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
-  for (auto& p : o.schedule.levels[0].passes) p.max_iterations = 8;
-  o.out_dir = TempDir(PrecisionName(precision));
   r.summary = Optimize(start.sdf, r.map, o);
   std::filesystem::remove_all(o.out_dir);
   return r;
@@ -105,7 +92,7 @@ TEST(PrecisionsThroughOptimize, EachPrecisionGivesWhatItsRangeAllows) {
   ASSERT_EQ(flt.summary.passes.size(), 2u);
   EXPECT_GE(flt.summary.passes[0].overflowed_cells, at_start.counts.overflowed);
   EXPECT_LE(flt.summary.absolute_end, flt.summary.absolute_start);
-  EXPECT_NEAR(AbsoluteEnergy(start, flt.map, WeightField::kLayer), flt.summary.absolute_end, 1e-12);
+  EXPECT_NEAR(start.AbsoluteEnergy(flt.map, WeightField::kLayer), flt.summary.absolute_end, 1e-12);
   // The exact (log-linear) energy of float's result is worse than double's: the overflowed cells
   // were left out of what it minimized.
   EXPECT_GT(flt.summary.absolute_end, dbl.summary.absolute_end);

@@ -4,16 +4,11 @@
 #include <fstream>
 
 #include "optim/optimizer.h"
+#include "optim/small_run.h"
 #include "util/error.h"
 
 namespace quijibo::optim {
 namespace {
-
-std::string BandTempDir(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / ("quijibo_band_" + name);
-  std::filesystem::remove_all(d);
-  return d.string();
-}
 
 // The same schedule with the narrow band and with the dense evaluator: the band's energy and
 // gradient equal the dense ones, so every pass ends at the same psi (the requirement: 1e-9). A
@@ -34,14 +29,10 @@ TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
   const char* names[3] = {"band", "dense", "band"};
   std::string dirs[3];
   for (int k = 0; k < 3; ++k) {
-    OptimizeOptions o;
-    o.schedule = Schedule::Parse("12(VFRF)24(VF)");
-    o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
-    for (auto& l : o.schedule.levels)
-      for (auto& p : l.passes) p.max_iterations = 30;
+    dirs[k] = TempDir(std::string("band_") + names[k] + std::to_string(k));
+    OptimizeOptions o = ScheduleAsWritten("12(VFRF)24(VF)", 30, dirs[k]);
     o.evaluator = names[k];
     if (k == 2) o.storage = LogLinearOptions::Storage::kOnTheFly;
-    o.out_dir = dirs[k] = BandTempDir(names[k] + std::to_string(k));
     result[k] = start;
     s[k] = Optimize(sdf, result[k], o);
     ASSERT_TRUE(s[k].complete);

@@ -18,15 +18,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// A folder of this test's own (ctest runs test cases in parallel).
-std::string Dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() /
-                     ("quijibo_callbacks_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
-                      "_" + name);
-  fs::remove_all(d);
-  return d.string();
-}
-
 // A callback from a function.
 struct Callback : IterationCallback {
   std::function<CallbackReturnType(const IterationSummary&)> f;
@@ -34,11 +25,11 @@ struct Callback : IterationCallback {
   CallbackReturnType operator()(const IterationSummary& s) override { return f(s); }
 };
 
-OptimizeOptions Small(const std::string& dir) {
+OptimizeOptions Small(const std::string& dir, const std::string& notation = "10(VFR)20(VF)") {
   OptimizeOptions o;
   o.weights = WeightField::kLayer;
   o.max_iterations = {6, 12, 8};
-  o.schedule = o.ScheduleFromNotation("10(VFR)20(VF)");
+  o.schedule = o.ScheduleFromNotation(notation);
   o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   o.checkpoint_every = 4;
   o.absolute_every = 3;
@@ -55,7 +46,7 @@ std::vector<std::string> Lines(const std::string& path) {
 
 TEST(IterationCallbackTest, EveryRecordIsTheLogLine) {
   SmallRun run;
-  OptimizeOptions o = Small(Dir("records"));
+  OptimizeOptions o = Small(TestCaseDir("callbacks", "records"));
   std::vector<std::string> records;
   int iterations = 0;
   Callback record([&](const IterationSummary& s) {
@@ -81,7 +72,7 @@ TEST(IterationCallbackTest, EveryRecordIsTheLogLine) {
 // An abort on a checkpoint iteration, or at a pass's end, leaves a checkpoint from which --resume
 // finishes exactly as the uninterrupted run did.
 TEST(IterationCallbackTest, AnAbortedRunResumesToTheUninterruptedOne) {
-  const std::string whole = Dir("whole");
+  const std::string whole = TestCaseDir("callbacks", "whole");
   {
     SmallRun run;
     ASSERT_TRUE(Optimize(run.sdf, run.map, Small(whole)).complete);
@@ -94,7 +85,7 @@ TEST(IterationCallbackTest, AnAbortedRunResumesToTheUninterruptedOne) {
       {"pass_start", [](const IterationSummary& s) { return s.type == T::kPassStart && s.level_index == 1; }}};
   for (const auto& [name, when] : stops) {
     SCOPED_TRACE(name);
-    const std::string dir = Dir("aborted_" + name);
+    const std::string dir = TestCaseDir("callbacks", "aborted_" + name);
     SmallRun run;
     const RationalMap start = run.map;
     OptimizeOptions o = Small(dir);
@@ -135,10 +126,8 @@ class ResumeRefusal : public ::testing::Test {
  protected:
   // A run stopped after its 5th iteration, with its start map.
   void SetUp() override {
-    dir_ = Dir("refusal");
-    OptimizeOptions o = Small(dir_);
-    o.schedule = o.ScheduleFromNotation("10(VF)");
-    o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
+    dir_ = TestCaseDir("callbacks", "refusal");
+    OptimizeOptions o = Small(dir_, "10(VF)");
     Callback stop([](const IterationSummary& s) {
       return s.type == IterationSummary::Type::kIteration && s.step == 5 ? CallbackReturnType::kAbort
                                                                           : CallbackReturnType::kContinue;
@@ -149,9 +138,7 @@ class ResumeRefusal : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
   OptimizeOptions Same() const {
-    OptimizeOptions o = Small(dir_);
-    o.schedule = o.ScheduleFromNotation("10(VF)");
-    o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
+    OptimizeOptions o = Small(dir_, "10(VF)");
     o.resume = true;
     return o;
   }
@@ -175,8 +162,7 @@ TEST_F(ResumeRefusal, TheSameSettingsResume) { EXPECT_EQ(Refusal(Same()), ""); }
 TEST_F(ResumeRefusal, APassCap) {
   OptimizeOptions o = Same();
   o.max_iterations.V = 5;
-  o.schedule = o.ScheduleFromNotation("10(VF)");
-  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
+  o.schedule = o.ScheduleFromNotation("10(VF)");  // its caps from the changed max_iterations
   EXPECT_EQ(Refusal(o),
             "--resume: the checkpoint was written with optimizer.max_iterations.V = 6, this run has 5; rerun "
             "without --resume or with the same settings");
@@ -187,7 +173,6 @@ TEST_F(ResumeRefusal, APassCap) {
             std::string::npos);
   o = Same();
   o.schedule = o.ScheduleFromNotation("10(VFR)");
-  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   EXPECT_NE(Refusal(o).find("optimizer.schedule.notation = \"10(VF)\", this run has \"10(VFR)\""), std::string::npos);
   o = Same();
   o.schedule.levels[0].passes[0].tolerance = 1e-3;

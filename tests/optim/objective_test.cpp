@@ -18,15 +18,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// A folder of this test's own (ctest runs test cases in parallel), removed if it exists.
-std::string ObjectiveTestDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() /
-                     ("quijibo_objective_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
-                      "_" + name);
-  fs::remove_all(d);
-  return d.string();
-}
-
 std::vector<json> ReadLog(const std::string& path) {
   std::vector<json> lines;
   std::ifstream in(path);
@@ -60,7 +51,7 @@ class ObjectiveTest : public ::testing::TestWithParam<std::pair<std::string, Pre
 TEST_P(ObjectiveTest, GivesTheEnergiesOfTheOptimizersLog) {
   const SmallRun run;
   OptimizeOptions o = ObjectiveRunOptions(GetParam().first, GetParam().second);
-  o.out_dir = ObjectiveTestDir("run");
+  o.out_dir = TestCaseDir("objective", "run");
   RationalMap result = run.map;
   const OptimizeSummary s = Optimize(run.sdf, result, o);
   ASSERT_TRUE(s.complete);
@@ -140,14 +131,14 @@ TEST(OptimizeWithoutFolder, WritesNothingAndGivesTheSameMap) {
   std::vector<json> with_records, without_records;
   RecordingCallback with_callback = records(with_records), without_callback = records(without_records);
   OptimizeOptions with = o;
-  with.out_dir = ObjectiveTestDir("with");
+  with.out_dir = TestCaseDir("objective", "with");
   with.callbacks = {&with_callback};
   RationalMap with_map = run.map;
   const OptimizeSummary with_summary = Optimize(run.sdf, with_map, with);
   ASSERT_TRUE(with_summary.complete);
   ASSERT_TRUE(fs::exists(with.out_dir + "/log.jsonl"));
 
-  const std::string cwd = ObjectiveTestDir("cwd");
+  const std::string cwd = TestCaseDir("objective", "cwd");
   fs::create_directories(cwd);
   const fs::path before = fs::current_path();
   fs::current_path(cwd);

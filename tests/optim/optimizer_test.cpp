@@ -183,16 +183,9 @@ TEST(ReweightTest, TotalsFollowTheReferenceRule) {
 
 TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {
   SmallRun run;
-  OptimizeOptions o;
+  OptimizeOptions o = ScheduleAsWritten("10(VFRF)20(VF)", 40, TempDir("schedule"));
   o.weights = WeightField::kLayer;
-  o.schedule = Schedule::Parse("10(VFRF)20(VF)");
-  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
-  for (auto& l : o.schedule.levels)
-    for (auto& p : l.passes) p.max_iterations = 40;
-  o.out_dir = TempDir("schedule");
-  const double before = LogLinearEnergy(run.map, MakeEnergyGrid(run.sdf, WeightField::kLayer))
-                            .Evaluate(run.map.variables(), EnergyMode::kFull, false)
-                            .energy;
+  const double before = run.AbsoluteEnergy(run.map, WeightField::kLayer);
   const OptimizeSummary s = Optimize(run.sdf, run.map, o);
   ASSERT_TRUE(s.complete);
   ASSERT_EQ(s.passes.size(), 6u);
@@ -226,13 +219,8 @@ TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {
 // and ends above the pass before on the finest one, as an R pass does with its reweighted field.
 TEST(OptimizerTest, TheResultIsTheBestMapOverAllPasses) {
   SmallRun run;
-  OptimizeOptions o;
+  OptimizeOptions o = ScheduleAsWritten("20(VF)8(V)", 40, TempDir("best"));
   o.weights = WeightField::kLayer;
-  o.schedule = Schedule::Parse("20(VF)8(V)");
-  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
-  for (auto& l : o.schedule.levels)
-    for (auto& p : l.passes) p.max_iterations = 40;
-  o.out_dir = TempDir("best");
   const OptimizeSummary s = Optimize(run.sdf, run.map, o);
   ASSERT_TRUE(s.complete);
   double best = s.absolute_start;
@@ -246,10 +234,7 @@ TEST(OptimizerTest, TheResultIsTheBestMapOverAllPasses) {
     std::fprintf(stderr, "note: the last pass ended lowest here; the test proves less\n");
   EXPECT_EQ(s.best_pass, best_pass);
   EXPECT_EQ(s.absolute_end, best);
-  const double map_energy = LogLinearEnergy(run.map, MakeEnergyGrid(run.sdf, WeightField::kLayer))
-                                .Evaluate(run.map.variables(), EnergyMode::kFull, false)
-                                .energy;
-  EXPECT_NEAR(map_energy, best, 1e-12);
+  EXPECT_NEAR(run.AbsoluteEnergy(run.map, WeightField::kLayer), best, 1e-12);
   const auto summary = nlohmann::json::parse(std::ifstream(o.out_dir + "/summary.json"));
   EXPECT_EQ(summary["best_pass"], best_pass);
   EXPECT_EQ(summary["absolute_end"].get<double>(), best);
@@ -262,31 +247,21 @@ TEST(OptimizerTest, TheResultIsTheBestMapOverAllPasses) {
 // inherits the coarse pass's map with kLast.
 TEST(OptimizerTest, ALevelStartsFromTheBestMapSoFar) {
   SmallRun converged;
-  OptimizeOptions o;
+  OptimizeOptions o = ScheduleAsWritten("20(VF)", std::nullopt, TempDir("level_start_converge"));
   o.weights = WeightField::kLayer;
-  o.schedule = Schedule::Parse("20(VF)");
-  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
   o.schedule.levels[0].passes[1].max_iterations = 2000;
-  o.out_dir = TempDir("level_start_converge");
   const OptimizeSummary c = Optimize(converged.sdf, converged.map, o);
   ASSERT_EQ(c.passes.back().stop, "tolerance");
   std::filesystem::remove_all(o.out_dir);
 
   // The coarse level: the first of these whose F pass ends above the start (a coarse grid can
   // also find a lower point of the fine energy; this test needs one that does not).
-  auto coarse_schedule = [](int c) {
-    Schedule sc = Schedule::Parse(std::to_string(c) + "(F)20(V)");
-    for (auto& l : sc.levels)
-      for (auto& p : l.passes) p.max_iterations = 200;
-    sc.levels[0].passes[0].tolerance = 0;  // move even on a small coarse gradient
-    return sc;
-  };
   bool found = false;
   for (int c : {4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15}) {
     RationalMap map = converged.map;
-    o.schedule = coarse_schedule(c);
-    o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
-    o.out_dir = TempDir("level_start_probe");
+    o = ScheduleAsWritten(std::to_string(c) + "(F)20(V)", 200, TempDir("level_start_probe"));
+    o.weights = WeightField::kLayer;
+    o.schedule.levels[0].passes[0].tolerance = 0;  // move even on a small coarse gradient
     const OptimizeSummary s = Optimize(converged.sdf, map, o);
     std::filesystem::remove_all(o.out_dir);
     if (s.passes[0].iterations > 0 && s.passes[0].absolute_end > s.absolute_start) {
@@ -326,13 +301,9 @@ TEST(OptimizerTest, ALevelStartsFromTheBestMapSoFar) {
 
 TEST(OptimizerTest, RunsEndToEndInLongDoubleWithTheCachedEvaluator) {
   SmallRun run;
-  OptimizeOptions o;
-  o.schedule = Schedule::Parse("8(VF)");
-  o.min_level_fidelity = 0;  // the schedule as written: the level rule is tested on its own
-  for (auto& p : o.schedule.levels[0].passes) p.max_iterations = 10;
+  OptimizeOptions o = ScheduleAsWritten("8(VF)", 10, TempDir("longdouble"));
   o.evaluator = "cached";
   o.precision = Precision::kLongDouble;
-  o.out_dir = TempDir("longdouble");
   const OptimizeSummary s = Optimize(run.sdf, run.map, o);
   EXPECT_TRUE(s.complete);
   EXPECT_LT(s.absolute_end, s.absolute_start);
