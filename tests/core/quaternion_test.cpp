@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "quijibo/quaternion.h"
@@ -38,6 +39,15 @@ std::vector<Quaternion<Real>> RandomQuaternions(std::uint64_t seed, int count) {
   return q;
 }
 
+// RandomQuaternions(seed, count), the n-th paired with the exponent first + n step.
+template <class Real>
+std::vector<std::pair<Quaternion<Real>, Real>> RandomPowers(std::uint64_t seed, int count, double first, double step) {
+  const std::vector<Quaternion<Real>> q = RandomQuaternions<Real>(seed, count);
+  std::vector<std::pair<Quaternion<Real>, Real>> powers;
+  for (int n = 0; n < count; ++n) powers.emplace_back(q[n], Real(first + n * step));
+  return powers;
+}
+
 TYPED_TEST(QuaternionTest, ProductIsHamiltonAndNormIsMultiplicative) {
   using Real = TypeParam;
   using Q = Quaternion<Real>;
@@ -68,15 +78,12 @@ TYPED_TEST(QuaternionTest, ExpInvertsLog) {
 TYPED_TEST(QuaternionTest, PowerIsRightForEveryExponentSign) {
   using Real = TypeParam;
   using Q = Quaternion<Real>;
-  const std::vector<Q> q = RandomQuaternions<Real>(3, 30);
-  for (int n = 0; n < 30; ++n) {
-    const Q& a = q[n];
+  for (const auto& [a, x] : RandomPowers<Real>(3, 30, 0.37, 0.1)) {
     // Integer powers against repeated products, both signs.
     EXPECT_LE(Dist(pow(a, Real(3)), a * a * a), Tol<Real>() * 64);
     EXPECT_LE(Dist(pow(a, Real(-2)), (a * a).inverse()), Tol<Real>() * 64);
     // a^x a^-x = 1 and |a^x| = |a|^x for fractional x (the reference code breaks this: it drops
     // the imaginary part for negative exponents).
-    const Real x = Real(0.37 + n * 0.1);
     EXPECT_LE(Dist(pow(a, x) * pow(a, -x), Q(1, 0, 0, 0)), Tol<Real>() * 64);
     using std::pow;
     EXPECT_LE(abs(pow(a, -x).norm() - pow(a.norm(), -x)) / pow(a.norm(), -x), Tol<Real>() * 64);
@@ -87,23 +94,16 @@ TYPED_TEST(QuaternionTest, PowerIsRightForEveryExponentSign) {
   EXPECT_EQ(pow(Q(0, 0, 0, 0), Real(2)), Q(0, 0, 0, 0));
 }
 
-}  // namespace
-}  // namespace quijibo
-
-namespace quijibo {
-namespace {
 TYPED_TEST(QuaternionTest, FusedLogAndPowerMatchesLogAndPow) {
   using Real = TypeParam;
   using Q = Quaternion<Real>;
-  const std::vector<Q> q = RandomQuaternions<Real>(5, 30);
-  for (int n = 0; n < 30; ++n) {
-    const Q& d = q[n];
-    const Real a = Real(-2.5 + 0.2 * n);
+  for (const auto& [d, a] : RandomPowers<Real>(5, 30, -2.5, 0.2)) {
     Q lg, p;
     LogAndPower(d, a, lg, p);
     EXPECT_LE(Dist(lg, log(d)), Tol<Real>() * 16);
     EXPECT_LE(Dist(p, pow(d, a)), Tol<Real>() * 64);
   }
 }
+
 }  // namespace
 }  // namespace quijibo

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "monopole/test_meshes.h"
 #include "util/error.h"
@@ -43,6 +44,22 @@ TwoSpheres MakeTwoSpheres(double r1, double r2) {
 // The log-kernel fit of the two spheres in the fractal frame with `o`; its summary into *s if given.
 RationalMap Fit(const TwoSpheres& t, const KernelFitOptions& o, KernelFitSummary* s = nullptr) {
   return KernelFitMap(t.vertices, t.triangles, t.sdf, FractalFrame{}, o, s);
+}
+
+struct SummarizedFit {
+  RationalMap map;
+  KernelFitSummary summary;
+};
+
+// The fits of t with `o` and with `o` as `change` leaves it (o keeps the change): what one option
+// does.
+template <class Change>
+std::pair<SummarizedFit, SummarizedFit> FitBeforeAndAfter(const TwoSpheres& t, KernelFitOptions& o, Change change) {
+  std::pair<SummarizedFit, SummarizedFit> fits;
+  fits.first.map = Fit(t, o, &fits.first.summary);
+  change(o);
+  fits.second.map = Fit(t, o, &fits.second.summary);
+  return fits;
 }
 
 TEST(KernelFit, StartsCloseOnTwoSpheresOfDifferentSize) {
@@ -91,14 +108,11 @@ TEST(KernelFit, RefinementAddsRootsWhereTheFitIsWrong) {
   KernelFitOptions o;
   o.roots = 16;
   o.origin_root = false;
-  KernelFitSummary plain, refined;
-  const RationalMap a = Fit(t, o, &plain);
-  o.refine_rounds = 2;
-  const RationalMap b = Fit(t, o, &refined);
-  EXPECT_EQ(plain.refine_rounds, 0);
-  EXPECT_GE(refined.refine_rounds, 1);
-  EXPECT_GT(b.root_count(), a.root_count());
-  EXPECT_GE(CheckStart(b, t.sdf).iou, CheckStart(a, t.sdf).iou - 1e-9);
+  const auto [plain, refined] = FitBeforeAndAfter(t, o, [](KernelFitOptions& x) { x.refine_rounds = 2; });
+  EXPECT_EQ(plain.summary.refine_rounds, 0);
+  EXPECT_GE(refined.summary.refine_rounds, 1);
+  EXPECT_GT(refined.map.root_count(), plain.map.root_count());
+  EXPECT_GE(CheckStart(refined.map, t.sdf).iou, CheckStart(plain.map, t.sdf).iou - 1e-9);
 }
 
 TEST(KernelFit, IsDeterministic) {
@@ -178,16 +192,13 @@ TEST(KernelFit, ThinPartsGetDenserRootPairsAndTheSpacingRuleSetsTheCount) {
   o.roots = 16;
   o.max_roots = 1000;
   o.spacing = 2;
-  KernelFitSummary wide, narrow;
-  const RationalMap a = Fit(t, o, &wide);
-  o.spacing = 1;
-  const RationalMap b = Fit(t, o, &narrow);
-  EXPECT_EQ(wide.spacing, 2);
-  EXPECT_EQ(narrow.spacing, 1);
-  EXPECT_GT(b.root_count(), 2.5 * a.root_count());
-  EXPECT_LT(b.root_count(), 5.5 * a.root_count());
+  const auto [wide, narrow] = FitBeforeAndAfter(t, o, [](KernelFitOptions& x) { x.spacing = 1; });
+  EXPECT_EQ(wide.summary.spacing, 2);
+  EXPECT_EQ(narrow.summary.spacing, 1);
+  EXPECT_GT(narrow.map.root_count(), 2.5 * wide.map.root_count());
+  EXPECT_LT(narrow.map.root_count(), 5.5 * wide.map.root_count());
   // And the bound binds: the spacing grows until the count fits.
-  o.max_roots = b.root_count() / 4 * 2;  // even: pairs
+  o.max_roots = narrow.map.root_count() / 4 * 2;  // even: pairs
   KernelFitSummary capped;
   const RationalMap c = Fit(t, o, &capped);
   EXPECT_EQ(c.root_count(), o.max_roots);
