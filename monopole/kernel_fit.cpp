@@ -392,18 +392,25 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
   if (auto why = o.Validate(); !why.empty()) throw Error("log-kernel fit: " + why);
   const auto t0 = std::chrono::steady_clock::now();
   const double h = sdf.frame.spacing;
+  KernelFitSummary out;
+  out.wall_depth_cells = WallDepthCells(sdf);
+  out.thin_walls = ThinWallsOn(o.thin_walls, sdf);
+  KernelFitOptions placement = o;
+  if (out.thin_walls) {
+    placement.spacing = std::max(1.0, o.spacing * KernelFitOptions::kThinWallSpacing);
+    placement.max_roots = std::min(4000, 2 * std::max(o.roots, o.max_roots));
+  }
 
   // Root positions: pairs along the normals of surface points, spaced in proportion to their
   // offset (PlacePairs).
   FitRoots roots;
-  const std::vector<RootPair> pairs = CandidatePairs(vertices, triangles, sdf, o);
-  const auto [chosen, spacing] = SpacePairs(pairs, o, h);
+  const std::vector<RootPair> pairs = CandidatePairs(vertices, triangles, sdf, placement);
+  const auto [chosen, spacing] = SpacePairs(pairs, placement, h);
   for (int k : chosen) roots.Add(pairs[k]);
   const int base_pairs = int(chosen.size());
   if (roots.roots.empty()) throw Error("log-kernel fit: no surface normals (is the signed distance field flat?)");
 
   const FitRows rows = MakeFitRows(sdf, o);
-  KernelFitSummary out;
   FitSolution fit;
   for (int round = 0;; ++round) {
     fit = SolveExponents(rows, roots.roots, o, o.band_cells * h);

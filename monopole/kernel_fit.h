@@ -33,6 +33,7 @@
 #include "quijibo/frame.h"
 #include "quijibo/grid.h"
 #include "quijibo/rational_map.h"
+#include "quijibo/target.h"
 
 namespace quijibo::monopole {
 
@@ -64,6 +65,13 @@ struct KernelFitOptions {
   // once the optimizer scales them apart the origin can become a pole and the n-step set turns
   // to dust (measured on the hand: n-step IoU 0.02).
   bool origin_root = true;
+  // On a thin-walled target (quijibo/target.h: most of the inside within three cells of the
+  // surface) the pairs are spaced kThinWallSpacing times as far apart and max_roots is doubled (at
+  // most 4000): walls two or three cells thick need denser pairs than the rule's 2.5 sizes to be
+  // shaped at all (the chair: start IoU 0.75 -> 0.82; docs/fidelity.md §9). kAuto decides from
+  // the target; the other kinds of target keep the rule as set.
+  ThinWallSwitch thin_walls = ThinWallSwitch::kAuto;
+  static constexpr double kThinWallSpacing = 0.6;
   std::uint64_t seed = 1;      // blue-noise sampling of the surface
   std::string Validate() const;
 };
@@ -73,6 +81,8 @@ struct KernelFitSummary {
   int iterations = 0;          // active-set iterations done (all rounds)
   int refine_rounds = 0;       // rounds that added roots
   double spacing = 0;          // the spacing ratio used (larger than asked when max_roots binds)
+  bool thin_walls = false;     // the thin-wall spacing was used (KernelFitOptions::thin_walls)
+  double wall_depth_cells = 0; // WallDepthCells of the target
   int top = 0, bottom = 0;     // fitted roots by sign (without the zero roots)
   double exponent_sum = 0;     // sum e_i: > 0 keeps the set bounded
   double rms_band = 0;         // weighted RMS of L - g on the band rows

@@ -121,6 +121,19 @@ Evaluation<Scalar> LevelObjective<Scalar>::Evaluate(const Vector& x) {
 }
 
 template <class Scalar>
+nlohmann::json LevelObjective<Scalar>::PassReport(const Vector& x, Scalar energy) {
+  if (!corner_evaluator_) return evaluator_->PassReport(x, mode_, energy);
+  const Scalar nodes = evaluator_->Evaluate(x, mode_).energy, corners = corner_evaluator_->Evaluate(x, mode_).energy;
+  nlohmann::json r = evaluator_->PassReport(x, mode_, nodes);
+  const nlohmann::json c = corner_evaluator_->PassReport(x, mode_, corners);
+  if (r.is_object() && c.is_object()) {
+    r["energy_error"] = std::max(r["energy_error"].get<double>(), c["energy_error"].get<double>());
+    r["corners"] = c;
+  }
+  return r;
+}
+
+template <class Scalar>
 LevelObjective<Scalar>::~LevelObjective() {
   weights_.EndPass();  // PassWeights must not give weights back to an evaluator that is gone
 }

@@ -54,7 +54,10 @@ class LevelObjective {
   EnergyMode mode() const { return mode_; }
   // psi on the level's grid (and, with between_nodes, on its corner twin: the sum).
   Evaluation<Scalar> Evaluate(const Vector& x);
-  nlohmann::json PassReport(const Vector& x, Scalar energy) { return evaluator_->PassReport(x, mode_, energy); }
+  // The evaluator's report at a pass's end (the band's: its check against the dense energy);
+  // `energy` is the objective's, with between_nodes the sum over both grids, so each grid's
+  // evaluator checks its own share (the corners' report under "corners").
+  nlohmann::json PassReport(const Vector& x, Scalar energy);
 
  private:
   PassWeights& weights_;

@@ -31,7 +31,7 @@ struct ObjectiveIn : Objective::Impl {
   using Vector = Eigen::Matrix<Scalar, -1, 1>;
   ObjectiveIn(const ScalarGrid& target, const RationalMap& map, const OptimizeOptions& o, int scheduled,
               const std::string& name)
-      : weights(target, o.weights, map, o.energy, RunLogLinearOptions(o, name), o.between_nodes),
+      : weights(target, o.weights, map, o.energy, RunLogLinearOptions(o, name), ThinWallsOn(o.between_nodes, target)),
         level(weights, map,
               scheduled <= 0 ? 0
                              : ResolvedLevelResolution(target, weights.finest_weight(), o.weights, scheduled,

@@ -123,14 +123,17 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
           .Doc("each level runs at the smallest resolution (from its scheduled one up to the finest) whose grid "
                "represents the target with at least this IoU; 0: the schedule as written, the paper's "
                "([fidelity.md](fidelity.md) §6)")
-          .Boolean(
+          .Enum(
               "between_nodes", "--between-nodes",
-              "Also fit every level's cell corners (a staggered twin of its grid): thin walls cannot pass through "
-              "the nodes and narrow between them; about twice the work",
-              [](auto& o) -> bool& { return o.between_nodes; })
+              "Also fit every level's cell corners (a staggered twin of its grid), so thin walls cannot pass "
+              "through the nodes and narrow between them; about twice the work: auto (on a thin-walled target), "
+              "on or off",
+              kThinWallSwitchNames, [](const O& o) { return ThinWallSwitchName(o.between_nodes); },
+              [](O& o, const std::string& v) { o.between_nodes = ParseThinWallSwitch(v); })
           .Doc("the energy also on every level's interior cell corners, a staggered twin of its grid (ψ is the sum "
                "over both): a fit whose walls two or three cells thin pass through the nodes and narrow between "
-               "them pays for it; about twice the work ([fidelity.md](fidelity.md))")
+               "them pays for it; about twice the work; `auto`: on when the 90th percentile of the inside's depth "
+               "is below 3 target cells ([fidelity.md](fidelity.md) §8, §9)")
           .Number(
               "alpha", "--alpha", "Sharpness of tanh", [](auto& o) -> double& { return o.energy.alpha; },
               EnergyOptions::kAlphaRange)

@@ -37,6 +37,7 @@ json OptimizeSummary::ToJson(const OptimizeOptions& o) const {
           {"weights", WeightFieldName(o.weights)},
           {"level_weights", LevelWeightsName(o.level_weights)},
           {"level_start", LevelStartName(o.level_start)}, {"min_level_fidelity", o.min_level_fidelity},
+          {"between_nodes", ThinWallSwitchName(o.between_nodes)}, {"between_nodes_on", between_nodes},
           {"levels", levels_json},
           {"alpha", o.energy.alpha}, {"memory", o.memory}, {"complete", complete},
           {"seconds", seconds}, {"absolute_start", absolute_start}, {"absolute_end", absolute_end},
@@ -154,7 +155,8 @@ class Runner {
     // absolute energy's too, where not stored), which need only the rows near the surface.
     loglinear_ = o_.loglinear();
     loglinear_.band = evaluator_ != "dense";
-    weights_.emplace(sdf_, o_.weights, map_, o_.energy, loglinear_, o_.between_nodes);
+    st_.summary.between_nodes = ThinWallsOn(o_.between_nodes, sdf_);
+    weights_.emplace(sdf_, o_.weights, map_, o_.energy, loglinear_, st_.summary.between_nodes);
     ResolveLevels();
     if (!o_.resume) NotifyRunStart();
 

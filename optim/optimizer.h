@@ -34,6 +34,7 @@
 #include "quijibo/energy.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/real.h"
+#include "quijibo/target.h"
 #include "util/settings.h"
 #include "quijibo/target.h"
 
@@ -85,8 +86,9 @@ struct OptimizeOptions {
   double min_level_fidelity = 0.8;
   // The energy also on every level's interior cell corners (CornerGrid): a fit whose thin walls
   // pass through the grid's nodes and narrow between them (docs/fidelity.md) pays for it. About
-  // twice the work of a pass and of the absolute energy.
-  bool between_nodes = false;
+  // twice the work of a pass and of the absolute energy; kAuto: on for a thin-walled target
+  // (quijibo/target.h), where the gap opens, and off elsewhere, where it costs and changes nothing.
+  ThinWallSwitch between_nodes = ThinWallSwitch::kAuto;
   // The log-linear evaluator's log-distance storage and, for kAuto, the finest level's budget
   // (kept in GB, the setting's unit, so that the JSON value reads back exactly).
   LogLinearOptions::Storage storage = LogLinearOptions{}.storage;
@@ -148,6 +150,7 @@ struct OptimizeSummary {
     double fidelity = 1;
   };
   std::vector<Level> levels;
+  bool between_nodes = false;  // OptimizeOptions::between_nodes as resolved on the target
   bool complete = false;     // false when interrupted or aborted
   // Why an incomplete run stopped: "interrupted" (SIGINT/SIGTERM) or "aborted by a callback".
   std::string stop_reason;

@@ -290,4 +290,30 @@ int ResolvedLevelResolution(const ScalarGrid& sdf, const std::vector<double>& fi
   return m;
 }
 
+double WallDepthCells(const ScalarGrid& sdf) {
+  std::vector<double> depth;
+  for (double phi : sdf.values)
+    if (phi < 0) depth.push_back(-phi / sdf.frame.spacing);
+  if (depth.empty()) return 0.0;
+  const auto k = std::ptrdiff_t(0.9 * double(depth.size() - 1));
+  std::nth_element(depth.begin(), depth.begin() + k, depth.end());
+  return depth[std::size_t(k)];
+}
+
+ThinWallSwitch ParseThinWallSwitch(const std::string& name) {
+  if (name == "auto") return ThinWallSwitch::kAuto;
+  if (name == "on") return ThinWallSwitch::kOn;
+  if (name == "off") return ThinWallSwitch::kOff;
+  throw Error("unknown thin-wall setting \"" + name + "\" (expected auto, on or off)");
+}
+
+std::string ThinWallSwitchName(ThinWallSwitch s) {
+  return s == ThinWallSwitch::kAuto ? "auto" : s == ThinWallSwitch::kOn ? "on" : "off";
+}
+
+bool ThinWallsOn(ThinWallSwitch s, const ScalarGrid& sdf) {
+  if (s != ThinWallSwitch::kAuto) return s == ThinWallSwitch::kOn;
+  return WallDepthCells(sdf) < kThinWallDepthCells;
+}
+
 }  // namespace quijibo

@@ -217,7 +217,7 @@ json RunShape(const ShapeBenchArgs& b, const Shape& sh, const fs::path& dir, con
   const json exp = {{"name", sh.name},
                     {"target", {{"mesh", sh.mesh}, {"resolution", b.resolution}, {"box", b.target_box}}},
                     {"initial", {{"kind", b.initializer}}},
-                    {"optimizer", {{"schedule", schedule}, {"absolute_every", 50}, {"between_nodes", b.optimizer.between_nodes}}},
+                    {"optimizer", {{"schedule", schedule}, {"absolute_every", 50}, {"between_nodes", ThinWallSwitchName(b.optimizer.between_nodes)}}},
                     {"mesh", {{"resolution", b.mesh_resolution}, {"iterations", b.o.julia.iterations}, {"vdb", false}}},
                     {"pictures", {{"slice_iterations", 1}}}};
   const std::string exp_path = (dir / "experiment.json").string();
@@ -321,7 +321,7 @@ std::string SuiteTable(const ShapeBenchArgs& b, const json& results) {
   std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
   const std::string header = "Shape suite, " + std::string(date) + ", " + std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) +
                              " cores; initializer " + b.initializer + ", schedule `" + b.schedule + "`" +
-                             (b.optimizer.between_nodes ? " with between_nodes" : "") + ", target " +
+                             ", between_nodes " + ThinWallSwitchName(b.optimizer.between_nodes) + ", target " +
                              std::to_string(b.resolution) + "³ (" + b.target_box + " box), mesh " +
                              std::to_string(b.mesh_resolution) + "³ n = " + std::to_string(b.o.julia.iterations) +
                              "; lattice " + std::to_string(b.o.lattice) + "³ over the shape box grown " +

@@ -50,6 +50,16 @@ void AddLogKernelSettings(Schema<O>& s) {
       .Doc("log-kernel: largest distance between root pairs in units of their size (the shorter offset): denser pairs "
            "on thin walls, and the shape sets the count ([fidelity.md](fidelity.md))")
       .When(Kind({"log-kernel"}))
+      .Enum(
+          "thin_walls", "--thin-walls",
+          "log-kernel: on a thin-walled target, pairs 0.6 times as far apart and max_roots doubled: auto (when "
+          "most of the inside is within 3 cells of the surface), on or off",
+          kThinWallSwitchNames, [](const O& o) { return ThinWallSwitchName(o.kernel.thin_walls); },
+          [](O& o, const std::string& v) { o.kernel.thin_walls = ParseThinWallSwitch(v); })
+      .Doc("log-kernel: on a thin-walled target the pairs are spaced 0.6 times `root_spacing` apart and `max_roots` "
+           "is doubled (at most 4000); `auto`: when the 90th percentile of the inside's depth is below 3 target "
+           "cells ([fidelity.md](fidelity.md) §9)")
+      .When(Kind({"log-kernel"}))
       .Number(
           "root_offset", "--root-offset", "log-kernel: distance of the roots from the surface, in cells",
           [](auto& o) -> double& { return o.kernel.offset_cells; }, 0.0, 50.0, true)
@@ -298,6 +308,7 @@ RationalMap FitLogKernel(const TargetResult& target, const O& o, monopole::Kerne
                     {"roots", o.kernel.roots},
                     {"max_roots", o.kernel.max_roots},
                     {"root_spacing", o.kernel.spacing},
+                    {"thin_walls", ThinWallSwitchName(o.kernel.thin_walls)},
                     {"offset_cells", o.kernel.offset_cells},
                     {"band_cells", o.kernel.band_cells},
                     {"band_amplitude", o.kernel.amplitude},
@@ -383,6 +394,8 @@ json FitSummary(const TargetResult& target, const O& o, const RationalMap& map, 
                        {"bottom", kfit.bottom},
                        {"exponent_sum", kfit.exponent_sum},
                        {"spacing", kfit.spacing},
+                       {"thin_walls", kfit.thin_walls},
+                       {"wall_depth_cells", kfit.wall_depth_cells},
                        {"rms_band", kfit.rms_band},
                        {"sign_agreement", kfit.sign_agreement}};
     s["seconds"] = {{"sdf", target.sdf_seconds}, {"fit", kfit.seconds}, {"png", png_seconds}};

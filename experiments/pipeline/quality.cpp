@@ -102,7 +102,7 @@ json RunQuality(const Experiment& e, const std::string& results, const QualityTh
         if (between < nodes - t.max_node_gap)
           warn("the one-step set fits the target grid's nodes (IoU " + Fixed(nodes, 3) + ") but not the space between "
                "them (IoU " + Fixed(between, 3) + " at the cell corners): parts about as thin as two or three cells are "
-               "beaded or broken between the nodes; \"optimizer\": {\"between_nodes\": true} makes the energy see "
+               "beaded or broken between the nodes; \"optimizer\": {\"between_nodes\": \"on\"} makes the energy see "
                "the corners too (docs/fidelity.md §8)");
       }
     }

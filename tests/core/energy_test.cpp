@@ -267,5 +267,23 @@ TEST(WeightsTest, LevelFidelitySaysWhetherALevelSeesTheTarget) {
   EXPECT_EQ(ResolvedLevelResolution(tube, tube_w, w, 64, lw, 0.8, &fid), 64);  // at or above the finest: kept
 }
 
+// The wall depth is the inside's 90th percentile depth in cells: for a ball of radius R cells,
+// R (1 - 0.1^(1/3)) = 0.536 R. A ball 10 cells in radius is thick, one 4 cells in radius thin.
+TEST(WeightsTest, WallDepthSaysWhetherATargetIsThinWalled) {
+  const ScalarGrid thick = AnalyticTarget("sphere", GridFrame::Cube(60, {0, 0, 0}, 6.0));
+  const ScalarGrid thin = AnalyticTarget("sphere", GridFrame::Cube(24, {0, 0, 0}, 6.0));
+  EXPECT_NEAR(WallDepthCells(thick), 0.536 * 10, 0.25);  // within a quarter cell of the continuous ball
+  EXPECT_NEAR(WallDepthCells(thin), 0.536 * 4, 0.25);
+  EXPECT_FALSE(ThinWallsOn(ThinWallSwitch::kAuto, thick));
+  EXPECT_TRUE(ThinWallsOn(ThinWallSwitch::kAuto, thin));
+  EXPECT_TRUE(ThinWallsOn(ThinWallSwitch::kOn, thick));
+  EXPECT_FALSE(ThinWallsOn(ThinWallSwitch::kOff, thin));
+  ScalarGrid empty = thin;
+  for (double& v : empty.values) v = 1.0;
+  EXPECT_EQ(WallDepthCells(empty), 0.0);
+  for (const std::string& name : kThinWallSwitchNames) EXPECT_EQ(ThinWallSwitchName(ParseThinWallSwitch(name)), name);
+  EXPECT_THROW(ParseThinWallSwitch("yes"), Error);
+}
+
 }  // namespace
 }  // namespace quijibo

@@ -205,6 +205,33 @@ TEST(KernelFit, ThinPartsGetDenserRootPairsAndTheSpacingRuleSetsTheCount) {
   EXPECT_GT(capped.spacing, 1.2);
 }
 
+// thin_walls: on a thin-walled target (two spheres 4 cells in radius: the inside's 90th percentile
+// depth 2.1 cells) auto spaces the pairs 0.6 times as far and doubles max_roots, so more roots;
+// on a thick one (9 cells) auto is off and the fit is the one without the rule.
+TEST(KernelFit, ThinWallsDensifyThePairsOnAThinWalledTargetOnly) {
+  KernelFitOptions o;
+  o.roots = 16;
+  o.max_roots = 400;
+  o.thin_walls = ThinWallSwitch::kOff;
+  const TwoSpheres thin = MakeTwoSpheres(0.4, 0.4);
+  EXPECT_LT(WallDepthCells(thin.sdf), kThinWallDepthCells);
+  const auto [off, on] = FitBeforeAndAfter(thin, o, [](KernelFitOptions& x) { x.thin_walls = ThinWallSwitch::kAuto; });
+  EXPECT_FALSE(off.summary.thin_walls);
+  EXPECT_TRUE(on.summary.thin_walls);
+  EXPECT_DOUBLE_EQ(on.summary.spacing, 0.6 * off.summary.spacing);
+  EXPECT_GT(on.map.root_count(), 2 * off.map.root_count());
+  EXPECT_NEAR(on.summary.wall_depth_cells, WallDepthCells(thin.sdf), 0.0);
+
+  o.thin_walls = ThinWallSwitch::kOff;
+  const TwoSpheres thick = MakeTwoSpheres(0.9, 0.9);
+  EXPECT_GT(WallDepthCells(thick.sdf), kThinWallDepthCells);
+  const auto [plain, automatic] =
+      FitBeforeAndAfter(thick, o, [](KernelFitOptions& x) { x.thin_walls = ThinWallSwitch::kAuto; });
+  EXPECT_FALSE(automatic.summary.thin_walls);
+  EXPECT_EQ(automatic.map.variables(), plain.map.variables());
+  EXPECT_EQ(automatic.map.top_roots, plain.map.top_roots);
+}
+
 TEST(KernelFit, RejectsBadOptions) {
   const TwoSpheres t = MakeTwoSpheres(0.7, 0.5);
   KernelFitOptions o;

@@ -13,8 +13,9 @@ namespace {
 // The same schedule with the narrow band and with the dense evaluator: the band's energy and
 // gradient equal the dense ones, so every pass ends at the same psi (the requirement: 1e-9). A
 // third run keeps no matrix (on-the-fly storage, as beyond ~100^3): its band anchors on blocks and
-// its absolute energies go through a band too; the same psi again.
-TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
+// its absolute energies go through a band too; the same psi again. With between_nodes each grid's
+// band checks its own share of the two-grid energy.
+void BandAndDenseRunsEndAtTheSamePsi(ThinWallSwitch between_nodes) {
   const ScalarGrid sdf = AnalyticTarget("torus", GridFrame::Cube(24, {0, 0, 0}, 3.0));
   RandomMapOptions ro;
   ro.top = 12;
@@ -29,8 +30,9 @@ TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
   const char* names[3] = {"band", "dense", "band"};
   std::string dirs[3];
   for (int k = 0; k < 3; ++k) {
-    dirs[k] = TempDir(std::string("band_") + names[k] + std::to_string(k));
+    dirs[k] = TempDir(std::string("band_") + names[k] + std::to_string(k) + ThinWallSwitchName(between_nodes));
     OptimizeOptions o = ScheduleAsWritten("12(VFRF)24(VF)", 30, dirs[k]);
+    o.between_nodes = between_nodes;
     o.evaluator = names[k];
     if (k == 2) o.storage = LogLinearOptions::Storage::kOnTheFly;
     result[k] = start;
@@ -46,6 +48,7 @@ TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
     EXPECT_EQ(band.iterations, dense.iterations) << p;
     // The band reports itself; the dense run does not.
     ASSERT_TRUE(band.band.is_object()) << p;
+    EXPECT_EQ(band.band.contains("corners"), between_nodes == ThinWallSwitch::kOn) << p;
     EXPECT_TRUE(dense.band.is_null()) << p;
     EXPECT_LE(band.band["energy_error"].get<double>(), 1e-12) << p;
     EXPECT_GE(band.band["anchors"].get<long long>(), 1) << p;
@@ -74,6 +77,12 @@ TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) {
   EXPECT_TRUE(pass_end_band);
   EXPECT_EQ(s[0].Report().find("band:"), std::string::npos) << s[0].Report();
   for (const std::string& d : dirs) std::filesystem::remove_all(d);
+}
+
+TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) { BandAndDenseRunsEndAtTheSamePsi(ThinWallSwitch::kOff); }
+
+TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsiBetweenTheNodes) {
+  BandAndDenseRunsEndAtTheSamePsi(ThinWallSwitch::kOn);
 }
 
 TEST(BandOptimizerTest, EvaluatorNamesResolve) {

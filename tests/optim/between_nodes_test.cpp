@@ -50,7 +50,7 @@ TEST_P(BetweenNodesEnergy, IsTheEtaWeightedSumOfTheNodesAndTheCorners) {
   const SmallRun run;
   OptimizeOptions o;
   o.evaluator = GetParam();
-  o.between_nodes = true;
+  o.between_nodes = ThinWallSwitch::kOn;
   const Eigen::VectorXd x = run.map.variables();
   Objective both(run.sdf, run.map, o);
   const std::vector<double> w = ComputeWeights(run.sdf, o.weights);
@@ -69,7 +69,7 @@ TEST_P(BetweenNodesEnergy, IsTheEtaWeightedSumOfTheNodesAndTheCorners) {
   EXPECT_LT((e.gradient - g).lpNorm<Eigen::Infinity>(), 1e-10 * g.lpNorm<Eigen::Infinity>());
   EXPECT_EQ(e.counts.cells, nodes.frame.cell_count() + corners.frame.cell_count());
   // Off, psi is the nodes' alone.
-  o.between_nodes = false;
+  o.between_nodes = ThinWallSwitch::kOff;
   Objective nodes_only(run.sdf, run.map, o);
   EXPECT_NEAR(nodes_only.Absolute(x), a.energy, 1e-12 * std::abs(a.energy));
 }
@@ -83,9 +83,10 @@ TEST(BetweenNodesRun, MinimizesTheTwoGridEnergy) {
   OptimizeOptions o;
   o.max_iterations = {6, 20, 8};
   o.schedule = o.ScheduleFromNotation("20(VF)");
+  o.between_nodes = ThinWallSwitch::kOff;
   RationalMap plain = run.map;
   const OptimizeSummary s0 = Optimize(run.sdf, plain, o);
-  o.between_nodes = true;
+  o.between_nodes = ThinWallSwitch::kOn;
   RationalMap staggered = run.map;
   const OptimizeSummary s1 = Optimize(run.sdf, staggered, o);
   ASSERT_TRUE(s0.complete);
@@ -96,6 +97,24 @@ TEST(BetweenNodesRun, MinimizesTheTwoGridEnergy) {
   EXPECT_LT(s1.absolute_end, s1.absolute_start);
   EXPECT_NE(s1.absolute_start, s0.absolute_start);
   EXPECT_GT((staggered.variables() - plain.variables()).norm(), 0.0);
+  EXPECT_FALSE(s0.between_nodes);
+  EXPECT_TRUE(s1.between_nodes);
+}
+
+// auto follows the target's walls: the 20^3 torus (tube 2.3 cells deep) is thin-walled, the same
+// torus on 60^3 is not; the summary says which was used.
+TEST(BetweenNodesRun, AutoIsOnForAThinWalledTargetOnly) {
+  const SmallRun run;
+  OptimizeOptions o;
+  o.max_iterations = {2, 2, 2};
+  o.schedule = o.ScheduleFromNotation("20(V)");
+  ASSERT_EQ(o.between_nodes, ThinWallSwitch::kAuto);
+  RationalMap a = run.map;
+  EXPECT_TRUE(Optimize(run.sdf, a, o).between_nodes);
+  const ScalarGrid fine = AnalyticTarget("torus", GridFrame::Cube(60, {0, 0, 0}, 3.0));
+  o.schedule = o.ScheduleFromNotation("60(V)");
+  RationalMap b = run.map;
+  EXPECT_FALSE(Optimize(fine, b, o).between_nodes);
 }
 
 }  // namespace

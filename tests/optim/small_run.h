@@ -56,12 +56,15 @@ inline std::string TestCaseDir(const std::string& prefix, const std::string& nam
 namespace optim {
 
 // A run of the schedule `notation` as written (min_level_fidelity 0: the level rule has tests of
-// its own), every pass capped at `max_iterations` (none: the notation's caps), into `out_dir`.
+// its own) on the grid's nodes (between_nodes off: the small grids here are thin-walled in cells, and
+// the corners have tests of their own), every pass capped at `max_iterations` (none: the notation's
+// caps), into `out_dir`.
 inline OptimizeOptions ScheduleAsWritten(const std::string& notation, std::optional<int> max_iterations,
                                          const std::string& out_dir) {
   OptimizeOptions o;
   o.schedule = Schedule::Parse(notation);
   o.min_level_fidelity = 0;
+  o.between_nodes = ThinWallSwitch::kOff;
   if (max_iterations)
     for (auto& l : o.schedule.levels)
       for (auto& p : l.passes) p.max_iterations = *max_iterations;
