@@ -65,9 +65,9 @@ struct KernelFitOptions {
   // once the optimizer scales them apart the origin can become a pole and the n-step set turns
   // to dust (measured on the hand: n-step IoU 0.02).
   bool origin_root = true;
-  // On a thin-walled target (quijibo/target.h: most of the inside within three cells of the
+  // On a thin-walled target (quijibo/target.h: most of the inside within four cells of the
   // surface) the pairs are spaced kThinWallSpacing times as far apart and max_roots is doubled (at
-  // most 4000): walls two or three cells thick need denser pairs than the rule's 2.5 sizes to be
+  // most 4000): walls a few cells thick need denser pairs than the rule's 2.5 sizes to be
   // shaped at all (the chair: start IoU 0.75 -> 0.82; docs/fidelity.md §9). kAuto decides from
   // the target; the other kinds of target keep the rule as set.
   ThinWallSwitch thin_walls = ThinWallSwitch::kAuto;

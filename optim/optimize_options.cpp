@@ -133,7 +133,7 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
           .Doc("the energy also on every level's interior cell corners, a staggered twin of its grid (ψ is the sum "
                "over both): a fit whose walls two or three cells thin pass through the nodes and narrow between "
                "them pays for it; about twice the work; `auto`: on when the 90th percentile of the inside's depth "
-               "is below 3 target cells ([fidelity.md](fidelity.md) §8, §9)")
+               "is below 4 target cells ([fidelity.md](fidelity.md) §8, §9)")
           .Number(
               "alpha", "--alpha", "Sharpness of tanh", [](auto& o) -> double& { return o.energy.alpha; },
               EnergyOptions::kAlphaRange)

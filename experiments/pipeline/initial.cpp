@@ -53,11 +53,11 @@ void AddLogKernelSettings(Schema<O>& s) {
       .Enum(
           "thin_walls", "--thin-walls",
           "log-kernel: on a thin-walled target, pairs 0.6 times as far apart and max_roots doubled: auto (when "
-          "most of the inside is within 3 cells of the surface), on or off",
+          "most of the inside is within 4 cells of the surface), on or off",
           kThinWallSwitchNames, [](const O& o) { return ThinWallSwitchName(o.kernel.thin_walls); },
           [](O& o, const std::string& v) { o.kernel.thin_walls = ParseThinWallSwitch(v); })
       .Doc("log-kernel: on a thin-walled target the pairs are spaced 0.6 times `root_spacing` apart and `max_roots` "
-           "is doubled (at most 4000); `auto`: when the 90th percentile of the inside's depth is below 3 target "
+           "is doubled (at most 4000); `auto`: when the 90th percentile of the inside's depth is below 4 target "
            "cells ([fidelity.md](fidelity.md) §9)")
       .When(Kind({"log-kernel"}))
       .Number(
