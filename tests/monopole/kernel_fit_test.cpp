@@ -108,6 +108,7 @@ TEST(KernelFit, RefinementAddsRootsWhereTheFitIsWrong) {
   KernelFitOptions o;
   o.roots = 16;
   o.origin_root = false;
+  o.thin_walls = ThinWallSwitch::kOff;  // few roots as set: the thin-wall rule has its own test
   const auto [plain, refined] = FitBeforeAndAfter(t, o, [](KernelFitOptions& x) { x.refine_rounds = 2; });
   EXPECT_EQ(plain.summary.refine_rounds, 0);
   EXPECT_GE(refined.summary.refine_rounds, 1);
@@ -179,6 +180,7 @@ TEST(KernelFit, ThinPartsGetDenserRootPairsAndTheSpacingRuleSetsTheCount) {
   o.offset_cells = 4;  // the plate, 3 cells thick, shortens its pairs' offsets below 1.5 cells
   o.origin_root = false;
   o.roots = o.max_roots = 200;
+  o.thin_walls = ThinWallSwitch::kOff;  // the spacing rule as set: the thin-wall rule has its own test
   const RationalMap m = Fit(t, o);
   EXPECT_EQ(m.root_count(), 200);
   int near_plate = 0;
