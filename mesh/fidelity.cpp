@@ -27,9 +27,14 @@ std::string FidelityOptions::Validate() const {
 
 nlohmann::json Fidelity::ToJson() const {
   nlohmann::json j = {{"inside_nodes", inside_nodes},
-                      {"one_step", {{"iou", one_step.iou}, {"leak", one_step.leak}, {"set_nodes", one_step.set_nodes}}}};
+                      {"one_step",
+                       {{"iou", one_step.iou},
+                        {"volume_iou", one_step.volume_iou},
+                        {"leak", one_step.leak},
+                        {"set_nodes", one_step.set_nodes}}}};
   if (has_n_step)
     j["n_step"] = {{"iou", n_step.iou},
+                   {"volume_iou", n_step.volume_iou},
                    {"closed_iou", n_step_closed_iou},
                    {"leak", n_step.leak},
                    {"set_nodes", n_step.set_nodes}};
@@ -102,6 +107,21 @@ std::vector<char> Close(const std::vector<char>& set, int n, int r) {
   return CubeFilter(CubeFilter(set, n, r, true), n, r, false);
 }
 
+namespace {
+
+// A uniform double in [0, 1) from (seed, index, axis): SplitMix64's finalizer, so a point depends
+// on its cell alone, not on the thread that draws it.
+double CellUniform(std::uint64_t seed, std::int64_t index, int axis) {
+  std::uint64_t z = seed * 0x9E3779B97F4A7C15ull + std::uint64_t(index) * 3 + std::uint64_t(axis) + 1;
+  z *= 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return double(z >> 11) * 0x1.0p-53;
+}
+
+}  // namespace
+
 Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& o) {
   if (auto why = o.Validate(); !why.empty()) throw Error("fidelity: " + why);
   const double b = map.frame.fractal_radius * (1.0 - 2.0 * map.frame.padding) / 2;  // half side of B
@@ -120,8 +140,18 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
   if (o.julia.iterations > 0) julia = std::make_unique<JuliaMap<double>>(iterated, o.julia);
   const std::int64_t count = std::int64_t(n) * n * n;
   std::vector<char> in_set(julia ? static_cast<std::size_t>(count) : 0), in_target(static_cast<std::size_t>(count));
+  auto in_one_step = [&](const Vec3& p) {
+    const double L = OneStepLogModulus(map, p);
+    return !std::isnan(L) && L < 0;
+  };
+  auto in_n_step = [&](const Vec3& p) {
+    const double v = julia->At(iterated.frame.user_to_fractal(map.frame.fractal_to_user(p))).log_modulus;
+    return !std::isnan(v) && v < o.iso;
+  };
   std::int64_t inside = 0, inter1 = 0, union1 = 0, set1 = 0, leak1 = 0, interN = 0, unionN = 0, setN = 0, leakN = 0;
-#pragma omp parallel for schedule(dynamic, 64) reduction(+ : inside, inter1, union1, set1, leak1, interN, unionN, setN, leakN)
+  std::int64_t v_inter1 = 0, v_union1 = 0, v_interN = 0, v_unionN = 0;
+#pragma omp parallel for schedule(dynamic, 64) \
+    reduction(+ : inside, inter1, union1, set1, leak1, interN, unionN, setN, leakN, v_inter1, v_union1, v_interN, v_unionN)
   for (std::int64_t c = 0; c < count; ++c) {
     const int i = int(c % n), j = int((c / n) % n), k = int(c / (std::int64_t(n) * n));
     const Vec3 p{bc[0] - half + i * step, bc[1] - half + j * step, bc[2] - half + k * step};
@@ -129,14 +159,24 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
     in_target[std::size_t(c)] = in;
     const bool outside_b = std::abs(p[0] - bc[0]) > b || std::abs(p[1] - bc[1]) > b || std::abs(p[2] - bc[2]) > b;
     inside += in;
-    const double L = OneStepLogModulus(map, p);
-    const bool s1 = !std::isnan(L) && L < 0;
+    const bool s1 = in_one_step(p);
     set1 += s1, inter1 += s1 && in, union1 += s1 || in, leak1 += s1 && outside_b;
     if (julia) {
-      const double v = julia->At(iterated.frame.user_to_fractal(map.frame.fractal_to_user(p))).log_modulus;
-      const bool sn = !std::isnan(v) && v < o.iso;
+      const bool sn = in_n_step(p);
       in_set[std::size_t(c)] = sn;
       setN += sn, interN += sn && in, unionN += sn || in, leakN += sn && outside_b;
+    }
+    // The cell whose lowest corner is this node: one uniform point in it.
+    if (i + 1 < n && j + 1 < n && k + 1 < n) {
+      Vec3 q;
+      for (int a = 0; a < 3; ++a) q[a] = p[a] + step * CellUniform(o.seed, c, a);
+      const bool qin = in_grid(q) && target.sample(q) < 0;
+      const bool q1 = in_one_step(q);
+      v_inter1 += q1 && qin, v_union1 += q1 || qin;
+      if (julia) {
+        const bool qn = in_n_step(q);
+        v_interN += qn && qin, v_unionN += qn || qin;
+      }
     }
   }
   Fidelity f;
@@ -149,8 +189,10 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
     return s;
   };
   f.one_step = figures(set1, inter1, union1, leak1);
+  f.one_step.volume_iou = IntersectionOverUnion(v_inter1, v_union1);
   if (julia) {
     f.n_step = figures(setN, interN, unionN, leakN), f.has_n_step = true;
+    f.n_step.volume_iou = IntersectionOverUnion(v_interN, v_unionN);
     const std::vector<char> closed = Close(in_set, n, o.closing);
     std::int64_t inter = 0, uni = 0;
     for (std::size_t c = 0; c < closed.size(); ++c) inter += closed[c] && in_target[c], uni += closed[c] || in_target[c];

@@ -279,17 +279,21 @@ std::string InitialGuessTable(const ShapeBenchArgs& b, const json& results) {
 // --markdown, the picture sheet; under a header line with the date, machine and settings.
 std::string SuiteTable(const ShapeBenchArgs& b, const json& results) {
   std::vector<double> ious;
-  std::string md = "| shape | triangles | roots | start IoU | ψ start → end | one-step IoU | leak | grid IoU: nodes / between | "
-                   "n-step IoU | n-step leak | Chamfer | Hausdorff | area ratio | box dim. | components | time |\n"
-                   "|---|---:|---:|---:|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  int gained = 0, compared = 0;
+  std::string md = "| shape | triangles | roots | start IoU | ψ start → end | one-step IoU | leak | volume IoU: start → "
+                   "optimized | grid IoU: nodes / between | n-step IoU | n-step volume IoU | n-step leak | Chamfer | "
+                   "Hausdorff | area ratio | box dim. | components | time |\n"
+                   "|---|---:|---:|---:|---|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const json& r : results) {
     const json opt = r.value("optimized", json::object());
     md += "| " + r["name"].get<std::string>() + " | " + std::to_string(r.value("triangles", 0)) + " | " +
           std::to_string(r.value("roots", 0)) + " | " + TableFigure(r.value("initial", json::object()), "one_step", "iou") +
           " | " + (r.contains("psi_end") ? F(r["psi_start"], 3) + " → " + F(r["psi_end"], 3) : "–") + " | " +
           TableFigure(opt, "one_step", "iou") + " | " + TableFigure(opt, "one_step", "leak") + " | " +
-          TableFigure(opt, "node_fit", "on_nodes_iou") + " / " + TableFigure(opt, "node_fit", "between_nodes_iou") + " | " +
-          TableFigure(opt, "n_step", "iou") + " | " + TableFigure(opt, "n_step", "leak") + " | " +
+          TableFigure(r.value("initial", json::object()), "one_step", "volume_iou") + " → " +
+          TableFigure(opt, "one_step", "volume_iou") + " | " + TableFigure(opt, "node_fit", "on_nodes_iou") + " / " +
+          TableFigure(opt, "node_fit", "between_nodes_iou") + " | " + TableFigure(opt, "n_step", "iou") + " | " +
+          TableFigure(opt, "n_step", "volume_iou") + " | " + TableFigure(opt, "n_step", "leak") + " | " +
           (opt.contains("chamfer") ? F(opt["chamfer"], 4) : "–") + " | " +
           (opt.contains("hausdorff") ? F(opt["hausdorff"], 3) : "–") + " | " + TableFigure(opt, "detail", "area_ratio") +
           " | " + TableFigure(opt, "detail", "box_dimension") + " | " +
@@ -298,6 +302,12 @@ std::string SuiteTable(const ShapeBenchArgs& b, const json& results) {
     if (r.contains("error")) md += " " + r["error"].get<std::string>();
     md += "\n";
     if (opt.contains("one_step")) ious.push_back(opt["one_step"]["iou"]);
+    const json init = r.value("initial", json::object());
+    if (opt.contains("one_step") && opt["one_step"].contains("volume_iou") && init.contains("one_step") &&
+        init["one_step"].contains("volume_iou")) {
+      ++compared;
+      gained += opt["one_step"]["volume_iou"].get<double>() >= init["one_step"]["volume_iou"].get<double>();
+    }
   }
   if (!ious.empty()) {
     std::sort(ious.begin(), ious.end());
@@ -306,6 +316,9 @@ std::string SuiteTable(const ShapeBenchArgs& b, const json& results) {
     md += "\nOne-step IoU: median " + F(median, 3) + ", lowest " + F(ious.front(), 3) + " (" + std::to_string(m) +
           " shapes).\n";
   }
+  if (compared > 0)
+    md += "The optimized map's one-step volume IoU is at least its start's on " + std::to_string(gained) + " of " +
+          std::to_string(compared) + " shapes.\n";
   if (!b.images.empty() && !b.markdown.empty()) {
     const fs::path rel = fs::relative(fs::absolute(b.images), fs::absolute(b.markdown).parent_path());
     md += "\n| shape | slice z = 0 (n = 1; grey both, orange set only, blue target only) | render (n = " +

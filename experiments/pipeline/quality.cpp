@@ -28,6 +28,11 @@ json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const
   o.reference_frame = options.reference_frame;
   const mesh::Fidelity f = mesh::MeasureSets(chosen, target, o);
   json j = f.ToJson();
+  // The start's one-step set at the same jittered points: whether the optimization moved the
+  // set's volume towards the target's, free of the lattice's aliasing (docs/fidelity.md §10).
+  mesh::FidelityOptions one = o;
+  one.julia.iterations = 0;
+  j["one_step"]["start_volume_iou"] = mesh::MeasureSets(initial, target, one).one_step.volume_iou;
   j["lattice"] = o.lattice;
   j["iterations"] = julia.iterations;
   // Orbits are trapped at the fractal origin (docs/fidelity.md §3): phi there, outside the grid
@@ -66,6 +71,9 @@ json RunQuality(const Experiment& e, const std::string& results, const QualityTh
     const int n = f.value("iterations", 0);
     figures["lattice"] = f["lattice"];
     figures["one_step"] = {{"iou", f["one_step"]["iou"]}, {"leak", f["one_step"]["leak"]}};
+    if (f["one_step"].contains("volume_iou") && f["one_step"].contains("start_volume_iou"))
+      figures["one_step"]["volume_iou"] = f["one_step"]["volume_iou"],
+      figures["one_step"]["start_volume_iou"] = f["one_step"]["start_volume_iou"];
     const double iou1 = f["one_step"].value("iou", 0.0), leak1 = f["one_step"].value("leak", 0.0);
     if (iou1 < t.min_iou)
       warn("the optimized map's one-step set does not follow the shape: one-step IoU " + Fixed(iou1, 3) +
@@ -155,6 +163,9 @@ std::string QualitySection(const json& q) {
   if (f.contains("one_step"))
     md << "| one-step IoU / leak (" << f.value("lattice", 0) << "^3 lattice) | " << Fixed(f["one_step"]["iou"], 3)
        << " / " << Fixed(f["one_step"]["leak"], 3) << " |\n";
+  if (f.contains("one_step") && f["one_step"].contains("volume_iou"))
+    md << "| one-step volume IoU (a point drawn in each lattice cell): start -> optimized | "
+       << Fixed(f["one_step"]["start_volume_iou"], 3) << " -> " << Fixed(f["one_step"]["volume_iou"], 3) << " |\n";
   if (f.contains("n_step"))
     md << "| n-step (n = " << f["n_step"].value("n", 0) << ") IoU / leak / fill | " << Fixed(f["n_step"]["iou"], 3)
        << " / " << Fixed(f["n_step"]["leak"], 3) << " / " << Fixed(f["n_step"]["fill"], 3) << " |\n";

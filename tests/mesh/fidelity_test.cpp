@@ -4,6 +4,10 @@
 
 #include <cmath>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "mesh/mesh_fixtures.h"
 #include "util/error.h"
 #include "quijibo/target.h"
@@ -47,6 +51,47 @@ TEST(Fidelity, ASetTooLargeLeaksOutOfTheShapeBox) {
   const Fidelity g = BallFidelity(0.8, 0);
   EXPECT_NEAR(g.one_step.iou, 0.512, 0.03);
   EXPECT_EQ(g.one_step.leak_nodes, 0);
+}
+
+TEST(Fidelity, VolumeIoUEstimatesTheIoUOfTheVolumes) {
+  // Ball(0.8) inside the unit sphere: the volumes' IoU is 0.8^3.
+  const Fidelity f = BallFidelity(0.8, 0);
+  EXPECT_NEAR(f.one_step.volume_iou, 0.512, 0.01);
+  // The n-step set of a map with its only root at the origin is its one-step set (as in
+  // TheNStepSetOfAPowerMapIsTheUnitBall): the same volume, 0.512 again.
+  const Fidelity g = BallFidelity(0.8, 2);
+  ASSERT_TRUE(g.has_n_step);
+  EXPECT_NEAR(g.n_step.volume_iou, 0.512, 0.01);
+}
+
+TEST(Fidelity, VolumeIoUIsFreeOfTheLatticesAliasing) {
+  // An 8-node lattice over B grown 20 % (half side 2.1): the nodes nearest the centre sit at
+  // (+-0.3, +-0.3, +-0.3), 0.52 from it, the next ones 0.99 away. Balls of radius 0.8 and 0.95
+  // hold the same 8 nodes, so their node IoU is 1; their volumes' IoU is (0.8 / 0.95)^3 = 0.60.
+  FidelityOptions o;
+  o.lattice = 8;
+  const Fidelity f = MeasureSets(Ball(0.8), SphereTarget(0.95), o);
+  EXPECT_DOUBLE_EQ(f.one_step.iou, 1.0);
+  EXPECT_LT(f.one_step.volume_iou, 0.85);
+  EXPECT_GT(f.one_step.volume_iou, 0.3);
+}
+
+TEST(Fidelity, VolumeIoUDependsOnTheSeedNotOnTheThreads) {
+  FidelityOptions o;
+  o.lattice = 24;
+  const RationalMap m = Ball(0.8);
+  const ScalarGrid t = SphereTarget(1.0);
+  const double a = MeasureSets(m, t, o).one_step.volume_iou;
+#ifdef _OPENMP
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const double one_thread = MeasureSets(m, t, o).one_step.volume_iou;
+  omp_set_num_threads(threads);
+  EXPECT_EQ(a, one_thread);
+#endif
+  EXPECT_EQ(a, MeasureSets(m, t, o).one_step.volume_iou);
+  o.seed = 2;
+  EXPECT_NE(a, MeasureSets(m, t, o).one_step.volume_iou);
 }
 
 TEST(Fidelity, TheNStepSetOfAPowerMapIsTheUnitBall) {
