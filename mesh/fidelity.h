@@ -11,7 +11,7 @@
 //   volume IoU the same at one point drawn uniformly in each lattice cell (seeded, stratified): an
 //              estimate of the IoU of the volumes, free of the lattice's aliasing, which on walls a
 //              few lattice cells thick moves the node IoU by 0.01-0.03 between lattices
-//              (docs/fidelity.md §10)
+//              (docs/fidelity.md §10); it doubles the evaluations of a measurement
 //   leak       |set outside B| / |inside|
 //   closed IoU IoU of the n-step set after a morphological closing (dilation then erosion by a cube
 //              of `closing` lattice cells' half side): whether the coarse shape, the silhouette,

@@ -285,12 +285,12 @@ std::string SuiteTable(const ShapeBenchArgs& b, const json& results) {
                    "Hausdorff | area ratio | box dim. | components | time |\n"
                    "|---|---:|---:|---:|---|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const json& r : results) {
-    const json opt = r.value("optimized", json::object());
+    const json opt = r.value("optimized", json::object()), init = r.value("initial", json::object());
     md += "| " + r["name"].get<std::string>() + " | " + std::to_string(r.value("triangles", 0)) + " | " +
-          std::to_string(r.value("roots", 0)) + " | " + TableFigure(r.value("initial", json::object()), "one_step", "iou") +
+          std::to_string(r.value("roots", 0)) + " | " + TableFigure(init, "one_step", "iou") +
           " | " + (r.contains("psi_end") ? F(r["psi_start"], 3) + " → " + F(r["psi_end"], 3) : "–") + " | " +
           TableFigure(opt, "one_step", "iou") + " | " + TableFigure(opt, "one_step", "leak") + " | " +
-          TableFigure(r.value("initial", json::object()), "one_step", "volume_iou") + " → " +
+          TableFigure(init, "one_step", "volume_iou") + " → " +
           TableFigure(opt, "one_step", "volume_iou") + " | " + TableFigure(opt, "node_fit", "on_nodes_iou") + " / " +
           TableFigure(opt, "node_fit", "between_nodes_iou") + " | " + TableFigure(opt, "n_step", "iou") + " | " +
           TableFigure(opt, "n_step", "volume_iou") + " | " + TableFigure(opt, "n_step", "leak") + " | " +
@@ -302,7 +302,6 @@ std::string SuiteTable(const ShapeBenchArgs& b, const json& results) {
     if (r.contains("error")) md += " " + r["error"].get<std::string>();
     md += "\n";
     if (opt.contains("one_step")) ious.push_back(opt["one_step"]["iou"]);
-    const json init = r.value("initial", json::object());
     if (opt.contains("one_step") && opt["one_step"].contains("volume_iou") && init.contains("one_step") &&
         init["one_step"].contains("volume_iou")) {
       ++compared;
