@@ -201,7 +201,7 @@ double ParameterField::EvaluateRegions(const Vec3& p) const {
   return v;
 }
 
-std::string ParameterField::validate(const std::string& name) const {
+std::string ParameterField::Validate(const std::string& name) const {
   if (!std::isfinite(value)) return name + " must be finite";
   for (const Region& r : regions) {
     if (!std::isfinite(r.value)) return name + ": region values must be finite";

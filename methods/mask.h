@@ -97,7 +97,7 @@ struct ParameterField {
     if (regions.empty()) return value;
     return EvaluateRegions(p);
   }
-  std::string validate(const std::string& name) const;
+  std::string Validate(const std::string& name) const;
 
  private:
   double EvaluateRegions(const Vec3& p) const;

@@ -289,8 +289,8 @@ VersorPolynomial ReadVersorPolynomial(const std::string& path) {
 // ---- the map ----
 
 std::string ShapeModulusOptions::Validate() const {
-  if (auto why = alpha.validate("alpha"); !why.empty()) return why;
-  if (auto why = beta.validate("beta"); !why.empty()) return why;
+  if (auto why = alpha.Validate("alpha"); !why.empty()) return why;
+  if (auto why = beta.Validate("beta"); !why.empty()) return why;
   for (double c : origin_offset)
     if (!std::isfinite(c)) return "origin offset must be finite";
   return {};

@@ -20,10 +20,9 @@ struct Objective::Impl {
 namespace {
 
 // The run's loglinear options for `evaluator`, as Optimize sets them up (optimizer.cpp).
-LogLinearOptions RunLogLinearOptions(const OptimizeOptions& o, const std::string& evaluator) {
-  LogLinearOptions l = o.loglinear();
-  l.band = evaluator != "dense";
-  return l;
+LogLinearOptions RunLogLinearOptions(const OptimizeOptions& o, const std::string& evaluator,
+                                     const ScalarGrid& target) {
+  return o.loglinear(evaluator, ThinWallsOn(o.between_nodes, target));
 }
 
 template <class Scalar>
@@ -31,12 +30,12 @@ struct ObjectiveIn : Objective::Impl {
   using Vector = Eigen::Matrix<Scalar, -1, 1>;
   ObjectiveIn(const ScalarGrid& target, const RationalMap& map, const OptimizeOptions& o, int scheduled,
               const std::string& name)
-      : weights(target, o.weights, map, o.energy, RunLogLinearOptions(o, name), ThinWallsOn(o.between_nodes, target)),
+      : weights(target, o.weights, map, o.energy, RunLogLinearOptions(o, name, target), ThinWallsOn(o.between_nodes, target)),
         level(weights, map,
               scheduled <= 0 ? 0
                              : ResolvedLevelResolution(target, weights.finest_weight(), o.weights, scheduled,
                                                        o.level_weights, o.min_level_fidelity),
-              o.level_weights, name, o.energy, RunLogLinearOptions(o, name)) {
+              o.level_weights, name, o.energy, RunLogLinearOptions(o, name, target)) {
     resolution = level.resolution();
     evaluator = name;
     const Vector x = map.variables().cast<Scalar>();
@@ -66,7 +65,7 @@ struct ObjectiveIn : Objective::Impl {
 Objective::Objective(const ScalarGrid& target, const RationalMap& map, const OptimizeOptions& options,
                      int resolution) {
   if (auto why = options.Validate(); !why.empty()) throw Error("objective: " + why);
-  if (auto why = map.validate(); !why.empty()) throw Error("objective: map: " + why);
+  if (auto why = map.Validate(); !why.empty()) throw Error("objective: map: " + why);
   if (resolution < 0) throw Error("objective: the level's resolution must be >= 0 (0: the target's grid)");
   const std::string evaluator = ResolveEvaluator(options.evaluator, options.precision);
   impl_ = DispatchPrecision(options.precision, [&]<class Real>() -> std::unique_ptr<Impl> {

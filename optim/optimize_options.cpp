@@ -53,10 +53,12 @@ Schedule OptimizeOptions::ScheduleFromNotation(const std::string& notation) cons
   return Schedule::Parse(notation, d.data());
 }
 
-LogLinearOptions OptimizeOptions::loglinear() const {
+LogLinearOptions OptimizeOptions::loglinear(const std::string& evaluator, bool between_nodes_on) const {
   LogLinearOptions l;
   l.storage = storage;
   l.memory_budget_bytes = memory_budget_gb * 1e9;
+  l.sharing = between_nodes_on ? 2 : 1;
+  l.band = evaluator != "dense";
   return l;
 }
 
@@ -126,14 +128,15 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
           .Enum(
               "between_nodes", "--between-nodes",
               "Also fit every level's cell corners (a staggered twin of its grid), so thin walls cannot pass "
-              "through the nodes and narrow between them; about twice the work: auto (on a thin-walled target), "
-              "on or off",
+              "through the nodes and narrow between them; about twice the work: on, auto (only on a thin-walled "
+              "target) or off (the paper's energy)",
               kThinWallSwitchNames, [](const O& o) { return ThinWallSwitchName(o.between_nodes); },
               [](O& o, const std::string& v) { o.between_nodes = ParseThinWallSwitch(v); })
           .Doc("the energy also on every level's interior cell corners, a staggered twin of its grid (ψ is the sum "
                "over both): a fit whose walls two or three cells thin pass through the nodes and narrow between "
-               "them pays for it; about twice the work; `auto`: on when the 90th percentile of the inside's depth "
-               "is below 4 target cells ([fidelity.md](fidelity.md) §8, §9)")
+               "them pays for it, and on thick shapes it is what makes the optimized volume at least the start's; "
+               "about twice the work; `auto`: only when the 90th percentile of the inside's depth is below 4 "
+               "target cells; `off`: the paper's energy, on the nodes ([fidelity.md](fidelity.md) §8, §9, §11)")
           .Number(
               "alpha", "--alpha", "Sharpness of tanh", [](auto& o) -> double& { return o.energy.alpha; },
               EnergyOptions::kAlphaRange)
@@ -148,7 +151,8 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
                "band anchors on blocks")
           .Number(
               "memory_budget_gb", "--memory-budget",
-              "GB the finest level's log-distance matrix may take with storage auto (else on the fly, ~5x slower)",
+              "GB the finest level's log-distance matrix may take with storage auto (else on the fly, ~5x slower); "
+              "the nodes' and the corners' evaluators share it when between_nodes is on",
               [](auto& o) -> double& { return o.memory_budget_gb; }, 0, 1e6)
           .Integer(
               "checkpoint_every", "--checkpoint-every", "Iterations between checkpoints",
@@ -168,12 +172,12 @@ bool PrecisionMismatch(const OptimizeOptions& o) {
 }  // namespace
 
 std::string OptimizeOptions::Validate() const {
-  if (auto why = schedule.validate(); !why.empty()) return "schedule: " + why;
+  if (auto why = schedule.Validate(); !why.empty()) return "schedule: " + why;
   if (auto why = Settings().Check(*this); !why.empty()) return why;
   if (PrecisionMismatch(*this)) return "the loglinear evaluator (band or dense) runs in double only";
   if (backend == "ceres" && precision != Precision::kDouble) return "the ceres back end runs in double only";
-  if (auto why = energy.validate(); !why.empty()) return why;
-  if (auto why = loglinear().validate(); !why.empty()) return why;
+  if (auto why = energy.Validate(); !why.empty()) return why;
+  if (auto why = loglinear().Validate(); !why.empty()) return why;
   return {};
 }
 

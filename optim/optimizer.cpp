@@ -153,9 +153,8 @@ class Runner {
     AddObservers();
     // Unless the passes evaluate densely, the log-linear evaluators are read through bands (the
     // absolute energy's too, where not stored), which need only the rows near the surface.
-    loglinear_ = o_.loglinear();
-    loglinear_.band = evaluator_ != "dense";
     st_.summary.between_nodes = ThinWallsOn(o_.between_nodes, sdf_);
+    loglinear_ = o_.loglinear(evaluator_, st_.summary.between_nodes);
     weights_.emplace(sdf_, o_.weights, map_, o_.energy, loglinear_, st_.summary.between_nodes);
     ResolveLevels();
     if (!o_.resume) NotifyRunStart();
@@ -440,7 +439,7 @@ OptimizeSummary Optimize(const ScalarGrid& sdf, RationalMap& map, const Optimize
   if (auto why = options.Validate(); !why.empty()) throw Error("optimize: " + why);
   if (options.resume && options.out_dir.empty())
     throw Error("optimize: resume needs the output folder of the interrupted run");
-  if (auto why = map.validate(); !why.empty()) throw Error("optimize: map: " + why);
+  if (auto why = map.Validate(); !why.empty()) throw Error("optimize: map: " + why);
   return DispatchPrecision(options.precision, [&]<class Real>() { return Runner<Real>(sdf, map, options).Run(); });
 }
 

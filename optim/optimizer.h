@@ -85,10 +85,11 @@ struct OptimizeOptions {
   // (the paper, the reference code).
   double min_level_fidelity = 0.8;
   // The energy also on every level's interior cell corners (CornerGrid): a fit whose thin walls
-  // pass through the grid's nodes and narrow between them (docs/fidelity.md) pays for it. About
-  // twice the work of a pass and of the absolute energy; kAuto: on for a thin-walled target
-  // (quijibo/target.h), where the gap opens, and off elsewhere, where it costs and changes nothing.
-  ThinWallSwitch between_nodes = ThinWallSwitch::kAuto;
+  // pass through the grid's nodes and narrow between them (docs/fidelity.md) pays for it, and on
+  // thick shapes a fit of the nodes alone can leave the volume between them as it was or worse
+  // (fidelity.md §11). About twice the work of a pass and of the absolute energy; kAuto: only on
+  // a thin-walled target (quijibo/target.h); kOff: the paper's energy, on the nodes.
+  ThinWallSwitch between_nodes = ThinWallSwitch::kOn;
   // The log-linear evaluator's log-distance storage and, for kAuto, the finest level's budget
   // (kept in GB, the setting's unit, so that the JSON value reads back exactly).
   LogLinearOptions::Storage storage = LogLinearOptions{}.storage;
@@ -119,7 +120,10 @@ struct OptimizeOptions {
   std::vector<PassSpec> PassDefaults() const;
   // `notation` ("25(VFRF)50(VF)") with PassDefaults(); throws quijibo::Error on bad notation.
   Schedule ScheduleFromNotation(const std::string& notation) const;
-  LogLinearOptions loglinear() const;  // storage and the budget in bytes
+  // The log-linear evaluators' options for a run with `evaluator` (read through a band unless
+  // "dense"): the storage, and the budget in bytes, shared by the nodes' and the corners'
+  // evaluators when `between_nodes_on`, so that fitting the corners takes no more memory.
+  LogLinearOptions loglinear(const std::string& evaluator = "band", bool between_nodes_on = false) const;
   // Every setting, resolved: the schedule in its JSON form, enums by name. out_dir, resume and
   // callbacks are not settings and are left out.
   nlohmann::json ToJson() const;

@@ -40,7 +40,7 @@ const Schema<PassSpec>& PassSpec::Settings() {
   return s;
 }
 
-std::string PassSpec::validate() const { return Settings().Check(*this); }
+std::string PassSpec::Validate() const { return Settings().Check(*this); }
 
 Schedule Schedule::Parse(const std::string& text, const PassSpec defaults[3]) {
   Schedule s;
@@ -80,7 +80,7 @@ Schedule Schedule::Parse(const std::string& text, const PassSpec defaults[3]) {
     s.levels.push_back(level);
     skip();
   }
-  if (auto why = s.validate(); !why.empty()) throw Error("schedule \"" + text + "\": " + why);
+  if (auto why = s.Validate(); !why.empty()) throw Error("schedule \"" + text + "\": " + why);
   return s;
 }
 
@@ -137,7 +137,7 @@ Schedule Schedule::FromJson(const JsonReader& r, const std::string& ptr) {
     }
     s.levels.push_back(level);
   }
-  if (auto why = s.validate(); !why.empty()) r.fail(ptr, why);
+  if (auto why = s.Validate(); !why.empty()) r.fail(ptr, why);
   if (r.has(ptr + "/notation") && r.string(ptr + "/notation") != s.notation())
     r.fail(ptr + "/notation", "\"" + r.string(ptr + "/notation") + "\" does not match the levels (" + s.notation() +
                                   "); give either \"notation\" or \"levels\"");
@@ -172,13 +172,13 @@ int Schedule::pass_count() const {
   return n;
 }
 
-std::string Schedule::validate() const {
+std::string Schedule::Validate() const {
   if (levels.empty()) return "the schedule is empty";
   for (const LevelSpec& l : levels) {
     if (l.resolution < 2 || l.resolution > 4096) return "resolutions must be in [2, 4096]";
     if (l.passes.empty()) return "level " + std::to_string(l.resolution) + " has no passes";
     for (const PassSpec& p : l.passes)
-      if (auto why = p.validate(); !why.empty()) return why;
+      if (auto why = p.Validate(); !why.empty()) return why;
   }
   return {};
 }

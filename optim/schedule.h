@@ -38,7 +38,7 @@ struct PassSpec {
   PassKind kind = PassKind::kFull;
   int max_iterations = kDefaultMaxIterations[1];
   double tolerance = kDefaultTolerance;  // on the infinity norm of the projected gradient
-  std::string validate() const;
+  std::string Validate() const;
   // max_iterations and tolerance, as a pass or a kind's "defaults" of the JSON form has them.
   static const Schema<PassSpec>& Settings();
 };
@@ -58,7 +58,7 @@ struct Schedule {
   nlohmann::json ToJson() const;
   std::string notation() const;
   int pass_count() const;
-  std::string validate() const;
+  std::string Validate() const;
 };
 
 // The default pass of a kind (kDefaultMaxIterations, kDefaultTolerance).

@@ -49,8 +49,8 @@ template <class Real>
 CachedEnergy<Real>::CachedEnergy(const RationalMap& map, const EnergyGrid& grid,
                                  const EnergyOptions& options)
     : frame_(grid.frame), slice_(grid.slice), weight_(grid.weight), eta_(grid.eta), options_(options) {
-  if (auto why = options.validate(); !why.empty()) throw Error("energy options: " + why);
-  if (auto why = map.validate(); !why.empty()) throw Error("map: " + why);
+  if (auto why = options.Validate(); !why.empty()) throw Error("energy options: " + why);
+  if (auto why = map.Validate(); !why.empty()) throw Error("map: " + why);
   if (std::int64_t(weight_.size()) != frame_.cell_count())
     throw Error("energy grid: weight count does not match the grid");
   for (int i = 0; i < map.top_count(); ++i) top_.push_back(map.top_root<Real>(i));

@@ -31,7 +31,6 @@ struct EnergyOptions {
   static constexpr ValueRange kAlphaRange{0, 1e6, true};
   std::string Validate() const;
   // Also under this name: optim/, the energy evaluators and the Python module call it so.
-  std::string validate() const { return Validate(); }
 };
 
 // Which variables an evaluation differentiates.

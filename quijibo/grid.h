@@ -48,7 +48,6 @@ struct GridFrame {
   // Empty string when valid, else what is wrong.
   std::string Validate() const;
   // Also under this name: optim/, the energy evaluators and the Python module call it so.
-  std::string validate() const { return Validate(); }
   bool operator==(const GridFrame&) const = default;
 };
 

@@ -61,8 +61,9 @@ double EnergyScale(double sum_abs_weight) {
 
 using Storage = LogLinearOptions::Storage;
 
-std::string LogLinearOptions::validate() const {
+std::string LogLinearOptions::Validate() const {
   if (!(memory_budget_bytes >= 0)) return "memory budget must be >= 0";
+  if (sharing < 1) return "memory budget sharing must be >= 1";
   return {};
 }
 
@@ -88,9 +89,9 @@ LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
                                  const EnergyOptions& options, const LogLinearOptions& loglinear)
     : frame_(grid.frame), slice_(grid.slice), eta_(grid.eta), options_(options), storage_(loglinear.storage) {
   const auto start = std::chrono::steady_clock::now();
-  if (auto why = options.validate(); !why.empty()) throw Error("energy options: " + why);
-  if (auto why = loglinear.validate(); !why.empty()) throw Error("loglinear options: " + why);
-  if (auto why = map.validate(); !why.empty()) throw Error("map: " + why);
+  if (auto why = options.Validate(); !why.empty()) throw Error("energy options: " + why);
+  if (auto why = loglinear.Validate(); !why.empty()) throw Error("loglinear options: " + why);
+  if (auto why = map.Validate(); !why.empty()) throw Error("map: " + why);
   total_cells_ = grid.frame.cell_count();
   if (std::int64_t(grid.weight.size()) != total_cells_)
     throw Error("energy grid: weight count does not match the grid");
@@ -113,11 +114,11 @@ LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
     root_z_.push_back(t[2]);
     root_w_.push_back(t[3]);
   }
-  memory_budget_bytes_ = loglinear.memory_budget_bytes;
-  cache_budget_bytes_ = loglinear.memory_budget_bytes / 2;
+  memory_budget_bytes_ = loglinear.memory_budget_bytes / loglinear.sharing;
+  cache_budget_bytes_ = memory_budget_bytes_ / 2;
   if (storage_ == Storage::kAuto) {
     const double matrix = double(m) * r * sizeof(double);
-    const double stored_max = loglinear.band ? loglinear.memory_budget_bytes / 8 : loglinear.memory_budget_bytes;
+    const double stored_max = loglinear.band ? memory_budget_bytes_ / 8 : memory_budget_bytes_;
     storage_ = matrix <= stored_max ? Storage::kDouble : Storage::kOnTheFly;
     // Not stored to save memory: the band's rows get what a stored matrix could have taken.
     if (matrix <= loglinear.memory_budget_bytes) cache_budget_bytes_ = std::min(cache_budget_bytes_, stored_max);

@@ -33,7 +33,9 @@ namespace quijibo {
 struct LogLinearOptions {
   enum class Storage { kAuto, kDouble, kFloat, kOnTheFly };
   Storage storage = Storage::kAuto;
-  double memory_budget_bytes = 8.0e9;  // for kAuto (the bunny at 97^3 with 504 roots: 3.8 GB)
+  // For kAuto: the bunny's 97^3 x 601 matrix (4.4 GB) is stored for a dense run; through a band,
+  // a run that fits between the nodes peaks at 1.3 GB on the demo (docs/benchmarks.md §18).
+  double memory_budget_bytes = 6.0e9;
   // The evaluator is read through a narrow band (band_energy.h), which evaluates a few % of the
   // cells and keeps their rows. kAuto then stores the matrix only when it takes at most
   // memory_budget_bytes / 8 (the coarse levels, where the band's blocks prove few cells saturated
@@ -41,7 +43,10 @@ struct LogLinearOptions {
   // eighth unless the matrix does not fit the budget at all (then half, as kOnTheFly): the bunny's
   // 97^3 x 601 matrix (4.4 GB) becomes < 1 GB of rows at little cost in time.
   bool band = false;
-  std::string validate() const;
+  // Evaluators of the same size that share the budget (the nodes' and the corners' of a run that
+  // fits between the nodes): each stores and caches within its part, budget / sharing.
+  int sharing = 1;
+  std::string Validate() const;
 };
 LogLinearOptions::Storage ParseStorage(const std::string& name);  // auto|double|float|on-the-fly
 std::string StorageName(LogLinearOptions::Storage s);
@@ -100,7 +105,7 @@ class LogLinearEnergy {
                  double max_bytes = std::numeric_limits<double>::infinity()) const;
   // Who last called CacheRows (null: nobody).
   const void* row_owner() const { return row_owner_; }
-  // The memory budget the evaluator was given (LogLinearOptions::memory_budget_bytes).
+  // The evaluator's part of the memory budget (LogLinearOptions::memory_budget_bytes / sharing).
   double memory_budget_bytes() const { return memory_budget_bytes_; }
   std::size_t cached_row_bytes() const { return row_cell_.size() * std::size_t(root_count()) * sizeof(double); }
   // The grid and the roots (the band's blocks bound D from them).

@@ -57,7 +57,6 @@ struct RationalMap {
   // Empty string when consistent, else the first problem found.
   std::string Validate() const;
   // Also under this name: optim/, the energy evaluators and the Python module call it so.
-  std::string validate() const { return Validate(); }
 
   template <class Real>
   Quaternion<Real> top_root(int i) const {

@@ -31,7 +31,7 @@ struct BandArgs {
   std::string roots = "331,708", grids = "97,193,257", target = "sphere", map_path, out_json = "bench-band.json",
               out_md = "bench-band.md";
   int iterations = 30, form_iterations = 300, dense_evaluations = 2;
-  double memory_budget_gb = 8.0;
+  double memory_budget_gb = LogLinearOptions{}.memory_budget_bytes / 1e9;
   std::uint64_t seed = 1;
 };
 
@@ -203,9 +203,9 @@ std::string Markdown(const json& cases) {
 
 }  // namespace
 
-void AddBenchBandCommand(CLI::App& app) {
+void AddBenchBandCommand(CLI::App& bench) {
   auto a = std::make_shared<BandArgs>();
-  CLI::App* b = app.get_subcommand("bench")->add_subcommand(
+  CLI::App* b = bench.add_subcommand(
       "band", "Dense log-linear evaluator against its narrow band: seconds per evaluation during an F pass on a "
               "fitted map, at fine levels");
   b->add_option("--roots", a->roots, "Root counts of the random maps (paper splits for 331, 708)")->capture_default_str();

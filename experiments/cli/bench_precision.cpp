@@ -286,9 +286,8 @@ void BenchPrecision(const PrecisionArgs& a) {
 
 }  // namespace
 
-void AddBenchCommand(CLI::App& app) {
-  CLI::App* b = app.add_subcommand("bench", "Benchmarks (results go to docs/benchmarks.md)");
-  b->require_subcommand(1);
+void AddBenchPrecisionCommands(CLI::App& bench) {
+  CLI::App* b = &bench;  // precision and precision-case
 
   // precision
   auto a = std::make_shared<PrecisionArgs>();

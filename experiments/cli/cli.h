@@ -19,14 +19,15 @@ namespace quijibo::cli {
 void AddEnergyCommand(CLI::App& app);
 void AddMapCommand(CLI::App& app);
 void AddTargetCommand(CLI::App& app);
-void AddBenchCommand(CLI::App& app);
 void AddPlotCommand(CLI::App& app);
 void AddOptimizeCommand(CLI::App& app);
-void AddModuleCommands(CLI::App& app);  // sdf, monopoles
-void AddModulusCommands(CLI::App& app);  // modulus, portal, compare, bench modulus (after AddBenchCommand)
-void AddJuliaCommands(CLI::App& app);   // mesh, picture, bench mesh (after AddBenchCommand)
-void AddShapeCommands(CLI::App& app);  // fidelity, bench shapes (after AddBenchCommand)
-void AddBenchBandCommand(CLI::App& app);  // bench band (after AddBenchCommand)
+// The commands of a concern, and its benchmarks under the `bench` group (`bench`, made by AddCommands).
+void AddTargetAndStartCommands(CLI::App& app, CLI::App& bench);  // sdf, monopoles; bench stages
+void AddModulusCommands(CLI::App& app, CLI::App& bench);  // modulus, portal, compare; bench modulus
+void AddJuliaCommands(CLI::App& app, CLI::App& bench);    // mesh, picture; bench mesh
+void AddShapeCommands(CLI::App& app, CLI::App& bench);    // fidelity; bench shapes
+void AddBenchPrecisionCommands(CLI::App& bench);          // bench precision (bench_precision.cpp)
+void AddBenchBandCommand(CLI::App& bench);                // bench band
 void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/cli/run.cpp)
 // Every subcommand above, in this order, and `settings` (experiments/cli/commands.cpp).
 void AddCommands(CLI::App& app);

@@ -23,14 +23,16 @@ void AddCommands(CLI::App& app) {
   AddEnergyCommand(app);
   AddMapCommand(app);
   AddTargetCommand(app);
-  AddBenchCommand(app);
+  CLI::App* bench = app.add_subcommand("bench", "Benchmarks (results go to docs/benchmarks.md)");
+  bench->require_subcommand(1);
+  AddBenchPrecisionCommands(*bench);
   AddOptimizeCommand(app);
   AddPlotCommand(app);
-  AddModuleCommands(app);
-  AddModulusCommands(app);
-  AddJuliaCommands(app);
-  AddShapeCommands(app);
-  AddBenchBandCommand(app);
+  AddTargetAndStartCommands(app, *bench);
+  AddModulusCommands(app, *bench);
+  AddJuliaCommands(app, *bench);
+  AddShapeCommands(app, *bench);
+  AddBenchBandCommand(*bench);
   AddRunCommand(app);
   AddSettingsCommand(app);
 }

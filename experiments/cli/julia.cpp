@@ -256,8 +256,7 @@ void AddPicture(CLI::App& app) {
 }
 
 // bench mesh: each resolution and kernel in a child process, so that its peak RSS is its own (wait4).
-void AddBenchMesh(CLI::App& app) {
-  CLI::App* bench = app.get_subcommand("bench");
+void AddBenchMesh(CLI::App* bench) {
   struct Args {
     std::string map, resolutions = "256,512", kernels = "scalar,vector", out;
     int iterations = JuliaOptions{}.iterations;
@@ -364,10 +363,10 @@ void AddBenchMesh(CLI::App& app) {
 
 void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher) { AddMesh(app, mesher); }
 
-void AddJuliaCommands(CLI::App& app) {
+void AddJuliaCommands(CLI::App& app, CLI::App& bench) {
   AddMesh(app, pipeline::LocalMesher);
   AddPicture(app);
-  AddBenchMesh(app);
+  AddBenchMesh(&bench);
 }
 
 }  // namespace quijibo::cli

@@ -188,9 +188,7 @@ void BenchModulus(const BenchModulusArgs& a) {
   std::printf("%s\n", rep.dump(1).c_str());
 }
 
-void AddBenchModulusCommand(CLI::App& app) {
-  CLI::App* bench = app.get_subcommand("bench");
-  if (!bench) return;
+void AddBenchModulusCommand(CLI::App* bench) {
   auto a = std::make_shared<BenchModulusArgs>();
   CLI::App* b = bench->add_subcommand(
       "modulus", "Shape modulus field cost: dense res^3 evaluation (OpenMP), CPU seconds via getrusage");
@@ -210,11 +208,11 @@ void AddBenchModulusCommand(CLI::App& app) {
 
 }  // namespace
 
-void AddModulusCommands(CLI::App& app) {
+void AddModulusCommands(CLI::App& app, CLI::App& bench) {
   AddModulusCommand(app);
   AddPortalCommand(app);
   AddCompareCommand(app);
-  AddBenchModulusCommand(app);
+  AddBenchModulusCommand(&bench);
 }
 
 }  // namespace quijibo::cli

@@ -392,9 +392,8 @@ void AddFidelityCommand(CLI::App& app) {
   c->callback([a] { WriteOutput(a->out, Measure(*a).dump(1) + "\n"); });
 }
 
-void AddBenchShapesCommand(CLI::App& app) {
+void AddBenchShapesCommand(CLI::App* bench) {
   auto b = std::make_shared<ShapeBenchArgs>();
-  CLI::App* bench = app.get_subcommand("bench");
   CLI::App* s = bench->add_subcommand(
       "shapes", "The shape suite: each shape through `quijibo run` (initial guess, schedule, mesh, pictures), then "
                 "one-step and n-step IoU and leak, Chamfer and Hausdorff, roots and time; a Markdown table and a "
@@ -424,9 +423,9 @@ void AddBenchShapesCommand(CLI::App& app) {
 
 }  // namespace
 
-void AddShapeCommands(CLI::App& app) {
+void AddShapeCommands(CLI::App& app, CLI::App& bench) {
   AddFidelityCommand(app);
-  AddBenchShapesCommand(app);
+  AddBenchShapesCommand(&bench);
 }
 
 }  // namespace quijibo::cli

@@ -191,9 +191,8 @@ void BenchStages(const StageBenchArgs& b) {
 }
 
 // bench stages: the monopole stage's parts, timed on real meshes.
-void AddBenchStagesCommand(CLI::App& app) {
+void AddBenchStagesCommand(CLI::App* bench) {
   auto b = std::make_shared<StageBenchArgs>();
-  CLI::App* bench = app.get_subcommand("bench");
   CLI::App* st = bench->add_subcommand(
       "stages", "Seconds of each part of the initial guess (mesh read, SDF, BEM, shell, P on the shell, "
                 "candidates, greedy fit, ln C scan) per mesh, median of repeats, and the process's peak memory");
@@ -209,10 +208,10 @@ void AddBenchStagesCommand(CLI::App& app) {
 
 }  // namespace
 
-void AddModuleCommands(CLI::App& app) {
+void AddTargetAndStartCommands(CLI::App& app, CLI::App& bench) {
   AddSdfCommand(app);
   AddMonopolesCommand(app);
-  AddBenchStagesCommand(app);
+  AddBenchStagesCommand(&bench);
 }
 
 }  // namespace quijibo::cli

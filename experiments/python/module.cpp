@@ -38,15 +38,15 @@
 #include "mesh/triangle_mesh.h"
 #include "optim/optimizer.h"
 #include "quijibo/energy.h"
-#include "util/error.h"
 #include "quijibo/frame.h"
 #include "quijibo/grid.h"
-#include "util/image.h"
-#include "util/json_reader.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/rational_map.h"
 #include "quijibo/real.h"
 #include "quijibo/target.h"
+#include "util/error.h"
+#include "util/image.h"
+#include "util/json_reader.h"
 
 namespace py = pybind11;
 using nlohmann::json;
@@ -199,7 +199,7 @@ py::array_t<double> GradientArray(const Eigen::Matrix<Real, -1, 1>& g) {
 }
 
 void CheckMap(const RationalMap& map, const char* what) {
-  if (auto why = map.validate(); !why.empty()) throw Error(std::string(what) + ": map: " + why);
+  if (auto why = map.Validate(); !why.empty()) throw Error(std::string(what) + ": map: " + why);
 }
 
 // A grid's values as a view (values[i, j, k], x fastest in memory) that keeps the grid alive.
@@ -228,7 +228,7 @@ ScalarGrid MakeGrid(const FArray& values, const Vec3& min_corner, double spacing
   g.frame.dims = {int(values.shape(0)), int(values.shape(1)), int(values.shape(2))};
   g.frame.min_corner = min_corner;
   g.frame.spacing = spacing;
-  if (auto why = g.frame.validate(); !why.empty()) throw Error("Grid: " + why);
+  if (auto why = g.frame.Validate(); !why.empty()) throw Error("Grid: " + why);
   g.values.assign(values.data(), values.data() + values.size());
   g.quantity = quantity;
   g.coordinates = coordinates;
@@ -820,7 +820,7 @@ PYBIND11_MODULE(quijibo, m) {
           [](ScalarGrid& g, double h) {
             GridFrame f = g.frame;
             f.spacing = h;
-            if (auto why = f.validate(); !why.empty()) throw Error("Grid.spacing: " + why);
+            if (auto why = f.Validate(); !why.empty()) throw Error("Grid.spacing: " + why);
             g.frame = f;
           })
       .def_readwrite("quantity", &ScalarGrid::quantity)

@@ -102,19 +102,23 @@ TEST(BetweenNodesRun, MinimizesTheTwoGridEnergy) {
 }
 
 // auto follows the target's walls: the 20^3 torus (tube 2.3 cells deep) is thin-walled, the same
-// torus on 60^3 is not; the summary says which was used.
-TEST(BetweenNodesRun, AutoIsOnForAThinWalledTargetOnly) {
+// torus on 60^3 is not; the default, on, fits the corners of both; the summary says which was used.
+TEST(BetweenNodesRun, AutoIsOnForAThinWalledTargetOnlyAndTheDefaultForEvery) {
   const SmallRun run;
   OptimizeOptions o;
   o.max_iterations = {2, 2, 2};
   o.schedule = o.ScheduleFromNotation("20(V)");
-  ASSERT_EQ(o.between_nodes, ThinWallSwitch::kAuto);
+  ASSERT_EQ(o.between_nodes, ThinWallSwitch::kOn);  // the default: on for every target
+  o.between_nodes = ThinWallSwitch::kAuto;
   RationalMap a = run.map;
   EXPECT_TRUE(Optimize(run.sdf, a, o).between_nodes);
   const ScalarGrid fine = AnalyticTarget("torus", GridFrame::Cube(60, {0, 0, 0}, 3.0));
   o.schedule = o.ScheduleFromNotation("60(V)");
   RationalMap b = run.map;
   EXPECT_FALSE(Optimize(fine, b, o).between_nodes);
+  o.between_nodes = OptimizeOptions{}.between_nodes;  // the default fits the corners of thick targets too
+  RationalMap c = run.map;
+  EXPECT_TRUE(Optimize(fine, c, o).between_nodes);
 }
 
 }  // namespace

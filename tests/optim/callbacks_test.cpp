@@ -212,7 +212,7 @@ TEST_F(ResumeRefusal, Storage) {
   EXPECT_NE(Refusal(o).find("optimizer.storage = \"auto\", this run has \"on-the-fly\""), std::string::npos);
   o = Same();
   o.memory_budget_gb = 1;
-  EXPECT_NE(Refusal(o).find("optimizer.memory_budget_gb = 8.0, this run has 1.0"), std::string::npos);
+  EXPECT_NE(Refusal(o).find("optimizer.memory_budget_gb = 6.0, this run has 1.0"), std::string::npos);
 }
 
 TEST_F(ResumeRefusal, TheTarget) {
