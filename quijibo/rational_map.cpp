@@ -256,6 +256,45 @@ RationalMap WithDetail(const RationalMap& map, double detail, double* lambda) {
   return m;
 }
 
+Vec4 TranslationForPotential(const RationalMap& iterated, const Vec3& direction, double potential) {
+  const double norm = std::sqrt(direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2]);
+  if (!std::isfinite(norm) || !(norm > 0)) throw Error("translation by potential: the direction must be finite and non-zero");
+  if (!(potential >= -1000.0 && potential < 0.0))
+    throw Error("translation by potential: the potential must be in [-1000, 0), got " + std::to_string(potential));
+  const Vec3 u{direction[0] / norm, direction[1] / norm, direction[2] / norm};
+  auto L = [&](double s) {
+    const double v = OneStepLogModulus(iterated, Vec3{-s * u[0], -s * u[1], -s * u[2]});
+    return std::isnan(v) ? std::numeric_limits<double>::infinity() : v;
+  };
+  const FractalFrame& f = iterated.frame;
+  const double side = f.fractal_radius * (1.0 - 2.0 * f.padding);
+  const Vec3 c = f.box_center();
+  // Far enough to leave the shape box from the origin in any direction.
+  const double reach = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) + side * std::sqrt(3.0);
+  const double at_origin = L(1e-9 * side);  // beside the origin: zero roots make L there -inf or NaN
+  if (!(at_origin < potential))
+    throw Error("translation by potential: L at the iteration frame's origin is " + std::to_string(at_origin) +
+                ", not below the potential " + std::to_string(potential) +
+                " asked for at -t: the origin is outside the set or too near its surface (iterate in the map's frame, "
+                "whose origin is deep inside, or give the translation itself)");
+  const double h = side / 2048;
+  double lo = 0.0, hi = -1.0;
+  for (double s = h; s <= reach; s += h) {
+    if (L(s) >= potential) {
+      hi = s;
+      break;
+    }
+    lo = s;
+  }
+  if (hi < 0) throw Error("translation by potential: L stays below the potential along the whole ray");
+  for (int i = 0; i < 60 && hi - lo > 1e-12 * side; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (L(mid) >= potential ? hi : lo) = mid;
+  }
+  const double s = 0.5 * (lo + hi);
+  return {s * u[0], s * u[1], s * u[2], 0.0};
+}
+
 RationalMap RandomMap(const RandomMapOptions& o) {
   if (auto why = o.Validate(); !why.empty()) throw Error("random map: " + why);
   // mt19937_64 and hand-made uniform draws: std::uniform_real_distribution's output is not

@@ -132,6 +132,22 @@ RationalMap WithDetail(const RationalMap& map, double detail, double* lambda = n
 // as optimized, 0.88 at 0.25; docs/meshing.md "Detail").
 inline constexpr double kSmoothDetail = 0.25;
 
+// Root translation by the potential at -t (docs/meshing.md "Root translation"). Translating the
+// roots and the samples by t iterates F(s) = R(s) - t: the inside of the one-step set, where |R| is
+// small, is sent to about -t, so where -t lies decides the n-step set. Deep inside the one-step set
+// it is the one-step set; outside, it empties; a little inside the surface (L(-t) between about -3
+// and -1.5 on a map with `detail`) the inside lands where R's versors decide its fate, and the
+// surface grows intricate, as the Julia set of q^2 + c does for c near the Mandelbrot set's edge.
+// Inputs: `iterated` the map as it is iterated (IterationMap: its detail and frame), `direction`
+// the translation's direction in that frame (x, y, z; its length is ignored), `potential` the
+// L = log|R| wanted at -t, in [-1000, 0).
+// Returns t = s u (k = 0), u = direction / |direction|, s the smallest s > 0 with
+// L(-s u) = potential (a march of 1/2048 of the shape box's side, then bisection), -s u on the
+// ray from the frame's origin. Throws quijibo::Error when the direction is zero or not finite, the
+// potential is out of range, L at the origin is not below `potential` (the ray must start inside
+// the set, deeper than the potential asked for), or L stays below it out to the box's far corner.
+Vec4 TranslationForPotential(const RationalMap& iterated, const Vec3& direction, double potential);
+
 // Indices into the variable vector.
 struct VariableIndex {
   static constexpr int kLnC = 0, kTau = 1, kBeta = 2, kFirstExponent = 3;

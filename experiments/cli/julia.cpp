@@ -81,8 +81,8 @@ struct JuliaArgs {
     c->add_option("--rotate", rotate, "Rotate the sampling box about its centre: ax,ay,az,degrees");
   }
   // Translation and rotation into the options; the rotation's centre is the box's.
-  void finish(const Vec3& box_center) {
-    o.julia = o.TranslatedJulia();
+  void finish(const RationalMap& map, const Vec3& box_center) {
+    o.julia = o.TranslatedJulia(map);
     if (!rotate.empty()) {
       o.rotation = ParseNumbers(rotate, "--rotate");
       if (o.rotation.size() != 4) throw Error("--rotate: expected ax,ay,az,degrees");
@@ -125,7 +125,8 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
               "A surface that does not cross the box is a result, not an error: write the summary (0 "
               "triangles) and no mesh files");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
-  a->j.add(c, {"resolution", "iterations", "escape", "capture", "iso", "iteration_frame", "detail", "frame", "precision", "kernel"});
+  a->j.add(c, {"resolution", "iterations", "escape", "capture", "iso", "iteration_frame", "detail", "translate_potential",
+               "frame", "precision", "kernel"});
   c->callback([a, mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
     // The output names first; their folders are created when the mesh is ready to be written.
@@ -137,7 +138,7 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
     o.meshing.show_progress = true;
     if (!a->box.empty()) o.box = ParseBox(a->box);
     if (!a->files.vdb.empty() && o.vdb_grids.empty()) throw Error("--vdb-grids: name at least one grid");
-    a->j.finish({0, 0, 0});  // the translation; MeshJulia places the rotation about the box's centre
+    a->j.finish(map, {0, 0, 0});  // the translation; MeshJulia places the rotation about the box's centre
     o.julia.placement = SampleTransform{};
     const pipeline::MeshStageResult r = pipeline::MeshJulia(map, o, mesher);
     if (!r.writer) return;
@@ -204,7 +205,7 @@ void AddPicture(CLI::App& app) {
     const mesh::SliceView base = pipeline::TargetSliceView(target, s->pics);
     const mesh::SliceView view = s->View(base.min_corner, base.max_corner);
     s->j.o.julia.iterations = s->pics.slice_iterations;
-    s->j.finish({(view.min_corner[0] + view.max_corner[0]) / 2, (view.min_corner[1] + view.max_corner[1]) / 2,
+    s->j.finish(map, {(view.min_corner[0] + view.max_corner[0]) / 2, (view.min_corner[1] + view.max_corner[1]) / 2,
                  (view.min_corner[2] + view.max_corner[2]) / 2});
     const pipeline::MeshStageOptions& o = s->j.o;
     const pipeline::SlicePicture pic =
@@ -231,7 +232,7 @@ void AddPicture(CLI::App& app) {
     const double h = map.frame.fractal_radius / 2;
     const Vec3 c = map.frame.box_center();
     const mesh::SliceView view = f->View({c[0] - h, c[1] - h, c[2] - h}, {c[0] + h, c[1] + h, c[2] + h});
-    f->j.finish({(view.min_corner[0] + view.max_corner[0]) / 2, (view.min_corner[1] + view.max_corner[1]) / 2,
+    f->j.finish(map, {(view.min_corner[0] + view.max_corner[0]) / 2, (view.min_corner[1] + view.max_corner[1]) / 2,
                  (view.min_corner[2] + view.max_corner[2]) / 2});
     CreateParentFolder(f->out);
     WritePng(f->out, mesh::ModulusVersorSlice(map, f->j.o.julia, view, f->modulus_scale, f->j.o.iso));

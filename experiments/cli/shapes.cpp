@@ -32,7 +32,7 @@ namespace {
 struct FidelityArgs {
   std::string map, target, julia_mesh, shape_mesh, out;
   mesh::FidelityOptions o;
-  pipeline::MeshStageOptions iteration;  // the mesh stage's iteration_frame, detail, translate and capture
+  pipeline::MeshStageOptions iteration;  // the mesh stage's iteration_frame, detail, translate(_potential), capture
 };
 
 void AddFidelityOptions(CLI::App* c, mesh::FidelityOptions& o) {
@@ -55,7 +55,7 @@ json Measure(const FidelityArgs& a) {
   pipeline::MeshStageOptions iteration = a.iteration;
   iteration.julia = o.julia;
   iteration.julia.capture_radius = a.iteration.julia.capture_radius;
-  o.julia = iteration.TranslatedJulia();
+  o.julia = iteration.TranslatedJulia(map);
   mesh::Fidelity f = mesh::MeasureSets(map, target, o);
   if (!a.julia_mesh.empty() || !a.shape_mesh.empty()) {
     if (a.julia_mesh.empty() || a.shape_mesh.empty())
@@ -388,7 +388,7 @@ void AddFidelityCommand(CLI::App& app) {
   AddFidelityOptions(c, a->o);
   c->add_option("--closing", a->o.closing, "Closed IoU: half side of the closing's cube, lattice cells")
       ->capture_default_str()->check(CLI::Range(0, 16));
-  BindSettings(c, a->iteration, {"iteration_frame", "detail", "translate", "capture"});
+  BindSettings(c, a->iteration, {"iteration_frame", "detail", "translate", "translate_potential", "capture"});
   c->callback([a] { WriteOutput(a->out, Measure(*a).dump(1) + "\n"); });
 }
 

@@ -72,6 +72,17 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
               [](auto& o) -> std::optional<std::vector<double>>& { return o.translate; }, {3, 4}, -1e6, 1e6)
           .Doc("root translation x, y, z[, k] in the iteration frame (as `quijibo mesh --translate`; changes the set "
                "when n > 1)")
+          .Number(
+              "translate_potential", "--translate-potential",
+              "Root translation chosen by the potential L = log|R| it leaves at -t, where the map sends the inside "
+              "of the set: along --translate's direction (default z), -3 rough, -2 intricate, -1.5 breaks up "
+              "(docs/meshing.md)",
+              [](auto& o) -> std::optional<double>& { return o.translate_potential; }, -1000.0, 0.0)
+          .OpenAbove()
+          .Doc("root translation by its effect: t along `translate`'s direction (default z; its length is ignored) "
+               "such that the iterated map's potential L = log|R| is this at −t, the point the inside of the "
+               "set is sent to: −3 rough, −2 intricate, −1.5 breaks up, 0 the surface; the translation found is "
+               "reported ([meshing.md](meshing.md) \"Root translation\")")
           .Choice("iteration_frame", "--iteration-frame",
                   "Frame the map is iterated in (and --translate, --box given in): map (as optimized) or reference "
                   "(the reference code's: origin at the box centre, longest side 3)",
@@ -107,10 +118,15 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
   return s;
 }
 
-JuliaOptions MeshStageOptions::TranslatedJulia() const {
+JuliaOptions MeshStageOptions::TranslatedJulia(const RationalMap& input_map) const {
   JuliaOptions j = julia;
-  if (translate)
+  if (translate_potential) {
+    const Vec3 direction = translate ? Vec3{(*translate)[0], (*translate)[1], (*translate)[2]} : Vec3{0.0, 0.0, 1.0};
+    j.root_translation = TranslationForPotential(IterationMap(input_map, iteration_frame == "reference", detail),
+                                                 direction, *translate_potential);
+  } else if (translate) {
     for (std::size_t a = 0; a < translate->size(); ++a) j.root_translation[a] = (*translate)[a];
+  }
   return j;
 }
 
@@ -124,6 +140,8 @@ std::string MeshStageOptions::Validate() const {
       return "vdb grids: expected surface, density or field, found " + g;
   if (!(vdb_band >= 1 && vdb_band <= 1000)) return "vdb band: expected a number in [1, 1000]";
   if (!rotation.empty() && rotation.size() != 4) return "rotation: expected ax,ay,az,degrees";
+  if (translate_potential && translate && translate->size() == 4 && (*translate)[3] != 0.0)
+    return "translate: with translate_potential it gives a direction in space (x, y, z), found a k component";
   return julia.Validate();
 }
 
@@ -160,7 +178,7 @@ MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& 
   if (o.box.size() == 6)
     for (int a = 0; a < 3; ++a) m.min_corner[a] = o.box[a], m.max_corner[a] = o.box[3 + a];
   if (auto why = m.Validate(); !why.empty()) throw Error("mesh: " + why);
-  r.julia = o.TranslatedJulia();
+  r.julia = o.TranslatedJulia(input_map);
   if (o.rotation.size() == 4) {
     const Vec3 center{(m.min_corner[0] + m.max_corner[0]) / 2, (m.min_corner[1] + m.max_corner[1]) / 2,
                       (m.min_corner[2] + m.max_corner[2]) / 2};

@@ -34,8 +34,12 @@ struct MeshStageOptions {
   // Root translation x, y, z[, k] in the iteration frame (julia.root_translation; the reference's
   // "root translation"); none: julia.root_translation as it is.
   std::optional<std::vector<double>> translate;
-  // `julia` with `translate` (when set) as its root translation.
-  JuliaOptions TranslatedJulia() const;
+  // The root translation by its effect (TranslationForPotential, rational_map.h): along
+  // `translate`'s direction (default z), the length at which the iterated map's L is this at -t.
+  std::optional<double> translate_potential;
+  // `julia` with its root translation: from `translate_potential` (on `input_map` as iterated: its
+  // `iteration_frame` and `detail`), else `translate` when set.
+  JuliaOptions TranslatedJulia(const RationalMap& input_map) const;
   // The frame the map is iterated in: "map" (the frame it was optimized in) or "reference" (the
   // reference code's world frame, ReferenceFrame in rational_map.h, where the paper's translations
   // 1.41 / 0.54 / 1.07 are given). The one-step set is the same in both; the box and `translate`

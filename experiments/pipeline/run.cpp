@@ -399,7 +399,7 @@ void Runner::FidelityStage(const std::string& initial_hash, const std::string& c
   set.iterations = e_.mesh.julia.iterations;
   set.escape_radius = e_.mesh.julia.escape_radius;
   set.slice = e_.mesh.julia.slice;
-  set.root_translation = e_.mesh.TranslatedJulia().root_translation;
+  set.root_translation = e_.mesh.TranslatedJulia(ReadMap(map_path)).root_translation;
   QualityOptions qo;
   qo.detail = e_.mesh.detail;
   qo.reference_frame = e_.mesh.iteration_frame == "reference";
