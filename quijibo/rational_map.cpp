@@ -275,8 +275,8 @@ Vec4 TranslationForPotential(const RationalMap& iterated, const Vec3& direction,
   if (!(at_origin < potential))
     throw Error("translation by potential: L at the iteration frame's origin is " + std::to_string(at_origin) +
                 ", not below the potential " + std::to_string(potential) +
-                " asked for at -t: the origin is outside the set or too near its surface (iterate in the map's frame, "
-                "whose origin is deep inside, or give the translation itself)");
+                " asked for at -t: the origin is outside the set or too near its surface (give the translation "
+                "itself, or iterate in the map's frame, whose origin a fit places deep inside the shape)");
   const double h = side / 2048;
   double lo = 0.0, hi = -1.0;
   for (double s = h; s <= reach; s += h) {

@@ -80,6 +80,34 @@ TEST_F(JuliaCli, DetailAndTheReferenceFrameAreRecordedAndChangeOnlyTheNStepSet) 
   EXPECT_EQ(ref["iteration_frame"]["name"], "reference");
   EXPECT_EQ(ref["iteration_frame"]["fractal_radius"].get<double>(), 4.0);
   EXPECT_EQ(ref["julia"]["root_translation"][2].get<double>(), 0.1);
+  // The translation by potential (on the steep map with a root at the origin, so the origin is
+  // inside): reported, the one-step set kept, the n-step set changed; of --translate, only the
+  // direction counts. An origin outside the set is refused with the reason.
+  m["top"].push_back({{"root", {0.0, 0.0, 0.0, 0.0}}, {"exponent", 3.0}});
+  std::ofstream(Path("ball.json")) << m.dump();
+  auto ball = [&](const std::string& extra, const std::string& out) {
+    const CommandResult r = RunQuijibo("mesh " + Path("ball.json") + " -o " + Path(out) + " -r 32 --frame fractal " + extra);
+    EXPECT_EQ(r.code, 0) << r.out;
+    return nlohmann::json::parse(r.out);
+  };
+  const auto b1 = ball("-n 1", "b1.ply"), tp1 = ball("-n 1 --translate-potential -2", "tp1.ply");
+  EXPECT_EQ(tp1["triangles"], b1["triangles"]);
+  const auto b4 = ball("-n 4 --detail 20", "b4.ply"), tp = ball("-n 4 --detail 20 --translate-potential -2", "tp.ply");
+  const double tz = tp["julia"]["root_translation"][2].get<double>();
+  EXPECT_GT(tz, 0.0);
+  EXPECT_EQ(tp["julia"]["root_translation"][0].get<double>(), 0.0);
+  EXPECT_NE(tp["triangles"], b4["triangles"]);
+  const auto tpx = ball("-n 4 --detail 20 --translate 0,0,7 --translate-potential -2", "tpx.ply");
+  EXPECT_NEAR(tpx["julia"]["root_translation"][2].get<double>(), tz, 1e-12);
+  for (const std::string& args : {std::string(" --translate 0,0,1,1 --translate-potential -2"),
+                                  " --translate-potential -2 -o " + Path("out.ply")}) {
+    const bool k = args.find("0,0,1,1") != std::string::npos;
+    const CommandResult r = RunQuijibo("mesh " + Path(k ? "ball.json" : "steep.json") +
+                                       (k ? " -o " + Path("k.ply") : std::string()) + args);
+    EXPECT_NE(r.code, 0) << args;
+    EXPECT_NE(r.out.find(k ? "k component" : "not below the potential"), std::string::npos) << r.out;
+  }
+  EXPECT_FALSE(Exists("k.ply") || Exists("out.ply"));
   // Out of range: one line, no output.
   const CommandResult bad = RunQuijibo("mesh " + Path("steep.json") + " -o " + Path("bad.ply") + " --detail -1");
   EXPECT_NE(bad.code, 0);

@@ -256,6 +256,39 @@ TEST(Julia, DetailWidensTheBandAboutTheSurfaceAndKeepsTheOneStepSet) {
   EXPECT_NEAR(r.tau, d.tau, 1e-15);
 }
 
+// The translation by potential: -t lands where the iterated map's L is the value asked for, on the
+// first crossing along the ray from the origin; bad requests are refused.
+TEST(Julia, TranslationForPotentialPutsMinusTWhereLIsTheValueAsked) {
+  RationalMap m = SteepBallMap();  // L = 40 log|q|: the unit ball, L(-t) = 40 log s
+  m.frame.fractal_radius = 4.0;
+  for (double potential : {-3.0, -2.0, -0.5}) {
+    const Vec4 t = TranslationForPotential(m, {0, 0, 2}, potential);
+    EXPECT_EQ(t[0], 0.0);
+    EXPECT_EQ(t[3], 0.0);
+    EXPECT_NEAR(t[2], std::exp(potential / 40.0), 1e-9);
+    EXPECT_NEAR(OneStepLogModulus(m, {-t[0], -t[1], -t[2]}), potential, 1e-7);
+  }
+  // Another direction; its length does not matter.
+  const Vec4 d = TranslationForPotential(m, {3, 4, 0}, -2.0);
+  EXPECT_NEAR(d[0] / 3, d[1] / 4, 1e-12);
+  EXPECT_NEAR(std::hypot(d[0], d[1]), std::exp(-2.0 / 40.0), 1e-9);
+  // Deeper asked for, shorter translation: -t nearer the origin.
+  EXPECT_LT(TranslationForPotential(m, {0, 0, 1}, -4.0)[2], TranslationForPotential(m, {0, 0, 1}, -1.0)[2]);
+  EXPECT_THROW(TranslationForPotential(m, {0, 0, 0}, -2.0), Error);
+  EXPECT_THROW(TranslationForPotential(m, {0, 0, std::nan("")}, -2.0), Error);
+  EXPECT_THROW(TranslationForPotential(m, {0, 0, 1}, 0.0), Error);
+  EXPECT_THROW(TranslationForPotential(m, {0, 0, 1}, -2000.0), Error);
+  // The origin outside the set: refused, with the reason.
+  RationalMap outside = m;
+  outside.top_roots = {{2.0, 0, 0, 0}};
+  try {
+    TranslationForPotential(outside, {0, 0, 1}, -2.0);
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not below the potential"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Julia, RotationIsRigid) {
   const SampleTransform t = SampleTransform::AxisAngle({0, 0, 2}, 90, {1, 0, 0});
   const Vec3 w = t.apply({2, 0, 0});
