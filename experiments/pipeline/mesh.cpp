@@ -264,6 +264,7 @@ json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std:
                    {{"name", o.iteration_frame},
                     {"detail", o.detail},
                     {"lambda", r.lambda},
+                    {"translate_potential", o.translate_potential ? json(*o.translate_potential) : json(nullptr)},
                     {"fractal_radius", r.frame.fractal_radius},
                     {"origin", r.frame.origin}}},
                   {"kernel", o.precision == "double" ? o.kernel : std::string("scalar")},

@@ -131,7 +131,11 @@ void MeshSection(Page& page) {
     md << "Iterated in the " << ms["iteration_frame"].value("name", "map") << " frame with detail "
        << ms["iteration_frame"].value("detail", 1.0) << " (fractal radius "
        << Fixed(ms["iteration_frame"].value("fractal_radius", 0.0), 3) << "), root translation "
-       << ms["julia"]["root_translation"].dump() << ".\n\n";
+       << ms["julia"]["root_translation"].dump()
+       << (ms["iteration_frame"].value("translate_potential", json()).is_number()
+               ? " (the length that leaves L = " + ms["iteration_frame"]["translate_potential"].dump() + " at -t)"
+               : std::string())
+       << ".\n\n";
   if (ms.contains("detail")) {
     const json& d = ms["detail"];
     md << "Detail: surface area " << Fixed(d.value("area_ratio", 0.0), 2)

@@ -95,6 +95,8 @@ TEST_F(JuliaCli, DetailAndTheReferenceFrameAreRecordedAndChangeOnlyTheNStepSet) 
   const auto b4 = ball("-n 4 --detail 20", "b4.ply"), tp = ball("-n 4 --detail 20 --translate-potential -2", "tp.ply");
   const double tz = tp["julia"]["root_translation"][2].get<double>();
   EXPECT_GT(tz, 0.0);
+  EXPECT_EQ(tp["iteration_frame"]["translate_potential"].get<double>(), -2.0);
+  EXPECT_TRUE(b4["iteration_frame"]["translate_potential"].is_null());
   EXPECT_EQ(tp["julia"]["root_translation"][0].get<double>(), 0.0);
   EXPECT_NE(tp["triangles"], b4["triangles"]);
   const auto tpx = ball("-n 4 --detail 20 --translate 0,0,7 --translate-potential -2", "tpx.ply");
