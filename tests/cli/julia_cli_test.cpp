@@ -65,11 +65,12 @@ TEST_F(JuliaCli, DetailAndTheReferenceFrameAreRecordedAndChangeOnlyTheNStepSet) 
   auto m = nlohmann::json::parse(std::ifstream(Path("map.json")));
   m["tau"] = m["tau"].get<double>() * 60, m["beta"] = m["beta"].get<double>() * 60, m["ln_C"] = m["ln_C"].get<double>() * 60;
   std::ofstream(Path("steep.json")) << m.dump();
-  auto mesh = [&](const std::string& extra, const std::string& out) {
-    const CommandResult r = RunQuijibo("mesh " + Path("steep.json") + " -o " + Path(out) + " -r 32 --frame fractal " + extra);
+  auto mesh_of = [&](const std::string& map, const std::string& extra, const std::string& out) {
+    const CommandResult r = RunQuijibo("mesh " + Path(map) + " -o " + Path(out) + " -r 32 --frame fractal " + extra);
     EXPECT_EQ(r.code, 0) << r.out;
     return nlohmann::json::parse(r.out);
   };
+  auto mesh = [&](const std::string& extra, const std::string& out) { return mesh_of("steep.json", extra, out); };
   const auto one = mesh("-n 1", "one.ply"), one_d = mesh("-n 1 --detail 20", "one_d.ply");
   EXPECT_EQ(one["triangles"], one_d["triangles"]);  // the one-step set stays
   const auto four = mesh("-n 4", "four.ply"), four_d = mesh("-n 4 --detail 20", "four_d.ply");
@@ -85,11 +86,7 @@ TEST_F(JuliaCli, DetailAndTheReferenceFrameAreRecordedAndChangeOnlyTheNStepSet) 
   // direction counts. An origin outside the set is refused with the reason.
   m["top"].push_back({{"root", {0.0, 0.0, 0.0, 0.0}}, {"exponent", 3.0}});
   std::ofstream(Path("ball.json")) << m.dump();
-  auto ball = [&](const std::string& extra, const std::string& out) {
-    const CommandResult r = RunQuijibo("mesh " + Path("ball.json") + " -o " + Path(out) + " -r 32 --frame fractal " + extra);
-    EXPECT_EQ(r.code, 0) << r.out;
-    return nlohmann::json::parse(r.out);
-  };
+  auto ball = [&](const std::string& extra, const std::string& out) { return mesh_of("ball.json", extra, out); };
   const auto b1 = ball("-n 1", "b1.ply"), tp1 = ball("-n 1 --translate-potential -2", "tp1.ply");
   EXPECT_EQ(tp1["triangles"], b1["triangles"]);
   const auto b4 = ball("-n 4 --detail 20", "b4.ply"), tp = ball("-n 4 --detail 20 --translate-potential -2", "tp.ply");
