@@ -103,3 +103,20 @@ if len(faces):
 if (results / "mesh" / "summary.json").exists():
     run_mesh = json.loads((results / "mesh" / "summary.json").read_text())
     print(f"the run's mesh, n = {n_run}: {run_mesh['vertices']} vertices, {run_mesh['triangles']} triangles")
+
+# %% [markdown]
+# The same map made intricate (docs/meshing.md "Root translation by potential"): fractal detail 4,
+# and the roots translated along z by the length that leaves the potential L = -2 at -t, where the
+# map sends the inside of the set. The one-step set stays; the surface grows ridges, pits and lobes.
+
+# %%
+try:
+    intricate = quijibo.mesh(rational_map, resolution=resolution, iterations=4, detail=4, translate_potential=-2,
+                             allow_empty=True)
+    t = intricate.summary["julia"]["root_translation"]
+    print(f"intricate: translation z = {t[2]:.4f}, {len(intricate.faces)} triangles, "
+          f"{intricate.summary['components']} components")
+    if len(intricate.faces):
+        quijibo.write_mesh(intricate, str(out / "julia-intricate.ply"))
+except quijibo.Error as e:  # e.g. the frame's origin is not inside the set
+    print(f"intricate: not meshed: {e}")

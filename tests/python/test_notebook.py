@@ -24,3 +24,4 @@ def test_notebook_plots_and_remeshes(tmp_path):
     expected = quijibo.mesh(quijibo.read_map(str(results / "optimized" / "map.json")), 24, 1)
     assert len(v) == len(expected.vertices) and len(f) == len(expected.faces)
     assert "n = 1:" in p.stdout
+    assert "intricate: " in p.stdout  # meshed, or refused with the reason
