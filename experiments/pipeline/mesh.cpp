@@ -119,11 +119,15 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
 }
 
 JuliaOptions MeshStageOptions::TranslatedJulia(const RationalMap& input_map) const {
+  if (!translate_potential) return TranslatedJuliaOfIterated(input_map);  // the map is not looked at
+  return TranslatedJuliaOfIterated(IterationMap(input_map, iteration_frame == "reference", detail));
+}
+
+JuliaOptions MeshStageOptions::TranslatedJuliaOfIterated(const RationalMap& iterated) const {
   JuliaOptions j = julia;
   if (translate_potential) {
     const Vec3 direction = translate ? Vec3{(*translate)[0], (*translate)[1], (*translate)[2]} : Vec3{0.0, 0.0, 1.0};
-    j.root_translation = TranslationForPotential(IterationMap(input_map, iteration_frame == "reference", detail),
-                                                 direction, *translate_potential);
+    j.root_translation = TranslationForPotential(iterated, direction, *translate_potential);
   } else if (translate) {
     for (std::size_t a = 0; a < translate->size(); ++a) j.root_translation[a] = (*translate)[a];
   }
@@ -178,7 +182,7 @@ MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& 
   if (o.box.size() == 6)
     for (int a = 0; a < 3; ++a) m.min_corner[a] = o.box[a], m.max_corner[a] = o.box[3 + a];
   if (auto why = m.Validate(); !why.empty()) throw Error("mesh: " + why);
-  r.julia = o.TranslatedJulia(input_map);
+  r.julia = o.TranslatedJuliaOfIterated(map);  // `map` is already the iterated one
   if (o.rotation.size() == 4) {
     const Vec3 center{(m.min_corner[0] + m.max_corner[0]) / 2, (m.min_corner[1] + m.max_corner[1]) / 2,
                       (m.min_corner[2] + m.max_corner[2]) / 2};

@@ -40,6 +40,9 @@ struct MeshStageOptions {
   // `julia` with its root translation: from `translate_potential` (on `input_map` as iterated: its
   // `iteration_frame` and `detail`), else `translate` when set.
   JuliaOptions TranslatedJulia(const RationalMap& input_map) const;
+  // The same when the caller holds the iterated map already (IterationMap of the input map with
+  // this `iteration_frame` and `detail`), so that it is not made twice.
+  JuliaOptions TranslatedJuliaOfIterated(const RationalMap& iterated) const;
   // The frame the map is iterated in: "map" (the frame it was optimized in) or "reference" (the
   // reference code's world frame, ReferenceFrame in rational_map.h, where the paper's translations
   // 1.41 / 0.54 / 1.07 are given). The one-step set is the same in both; the box and `translate`
