@@ -1,7 +1,7 @@
 // Pictures of a Julia set (PNG through util/image.h):
 //  - a slice of the set against the target shape: agreement in grey, mismatches in two colours;
 //  - a slice of the iterate's modulus and versor (the 2023 paper's Fig. 2 idea);
-//  - a shaded rendering of a mesh from a few viewpoints (software z-buffer, Lambert shading).
+//  - shaded renderings of a mesh: mesh/render.h.
 #pragma once
 
 #include <cstdint>
@@ -9,6 +9,7 @@
 #include <string>
 
 #include "mesh/marching_cubes.h"
+#include "mesh/render.h"
 #include "mesh/triangle_mesh.h"
 #include "quijibo/grid.h"
 #include "util/image.h"
@@ -58,14 +59,5 @@ Image ModulusVersorSlice(const RationalMap& map, const JuliaOptions& options, co
 // The slice z = 0 of a field over the box of `sdf` (its larger side, `size` pixels square):
 // {field < 0} black, else light grey, the target's outline {sdf = 0} red (`quijibo compare`).
 Image InsideSlice(const std::function<double(const Vec3&)>& field, const ScalarGrid& sdf, int size);
-
-// `views` (1 to 4) orthographic views side by side: front (looking along -z), side (along -x),
-// top (along -y) and three-quarter; each `size` pixels square, light from the viewer's upper left.
-struct RenderOptions {
-  int size = 400;  // pixels per view, in [16, 8192]
-  int views = 4;   // in [1, 4]
-};
-Image RenderMesh(const TriangleMesh& mesh, int size, int views);
-inline Image RenderMesh(const TriangleMesh& mesh, const RenderOptions& o = {}) { return RenderMesh(mesh, o.size, o.views); }
 
 }  // namespace quijibo::mesh

@@ -9,7 +9,8 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev libpng-dev
   libgtest-dev
   gnuplot-nox
-  libassimp-dev
+  libassimp-dev libembree-dev
+  ffmpeg
   mpi-default-dev mpi-default-bin
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
 )

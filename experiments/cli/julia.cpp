@@ -244,10 +244,10 @@ void AddPicture(CLI::App& app) {
     pipeline::PicturesOptions pics;
   };
   auto r = std::make_shared<RenderArgs>();
-  CLI::App* rc = p->add_subcommand("render", "Shaded views of a mesh (front, side, top, three-quarter)");
+  CLI::App* rc = p->add_subcommand("render", "Shaded views of a mesh (front, side, top, three-quarter), ray-traced with ambient occlusion and soft shadows");
   rc->add_option("mesh", r->mesh, "Mesh (PLY, OBJ, STL, OFF)")->required();
   rc->add_option("-o,--out", r->out, "Output .png")->required();
-  BindSettings(rc, r->pics, {"render_size", "render_views"});
+  BindSettings(rc, r->pics, {"render_size", "render_views", "render_shading", "render_samples", "render_ao_rays"});
   rc->callback([r] {
     CheckPng(r->out);
     const Image image = mesh::RenderMesh(mesh::ReadMesh(r->mesh), r->pics.render);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "experiments/pipeline/triptych.h"
 #include "util/error.h"
 #include "util/io.h"
 
@@ -13,7 +14,8 @@ namespace fs = std::filesystem;
 namespace {
 
 const std::vector<std::string> kTopKeys = {"name",      "description", "method",   "seed",    "target",  "initial",
-                                           "optimizer", "mesh",        "pictures", "outputs", "modulus", "portal"};
+                                           "optimizer", "mesh",        "pictures", "outputs", "modulus", "portal",
+                                           "intricate"};
 
 struct Top {
   std::string name, description, method = "quijibo";
@@ -78,6 +80,7 @@ json DescribeSettings() {
           {"optimizer", optim::OptimizeOptions::Settings().Describe()},
           {"optimizer/schedule", optim::PassSpec::Settings().Describe()},
           {"mesh", MeshStageOptions::Settings().Describe()},
+          {"intricate", MeshStageOptions::Settings().Describe(IntricateDefaults(MeshStageOptions()))},
           {"modulus", ModulusStageOptions::Settings().Describe()},
           {"modulus/versor", VersorOptions::Settings().Describe()},
           {"modulus/output", ProductOutputOptions::Settings().Describe(modulus.output)},
@@ -117,6 +120,7 @@ Experiment Experiment::FromJson(const json& doc, const std::string& source, cons
   only_for("initial", {"quijibo"});
   only_for("optimizer", {"quijibo"});
   only_for("mesh", {"quijibo"});
+  only_for("intricate", {"quijibo"});
   only_for("modulus", {"modulus"});
   only_for("portal", {"portal"});
 
@@ -150,6 +154,11 @@ Experiment Experiment::FromJson(const json& doc, const std::string& source, cons
       r.fail("/mesh/optimizer",
              CheckValue(json(e.mesh.optimizer), SettingType::kChoice, 0, 0, false, false, names, {}));
     if (std::string why = e.mesh.Validate(); !why.empty()) r.fail("/mesh", why);
+    e.intricate = MeshStageOptions::FromJson(r, "/intricate", base, IntricateDefaults(e.mesh));
+    if (std::find(names.begin(), names.end(), e.intricate.optimizer) == names.end())
+      r.fail("/intricate/optimizer",
+             CheckValue(json(e.intricate.optimizer), SettingType::kChoice, 0, 0, false, false, names, {}));
+    if (std::string why = e.intricate.Validate(); !why.empty()) r.fail("/intricate", why);
   }
   if (method == "modulus") {
     ModulusStageOptions start;
@@ -176,6 +185,7 @@ json Experiment::ToJson() const {
     out["optimizer"] = json::array();
     for (const auto& o : optimizers) out["optimizer"].push_back(o.ToJson());
     out["mesh"] = mesh.ToJson();
+    out["intricate"] = intricate.ToJson();
   }
   if (method == "modulus") out["modulus"] = modulus.ToJson();
   if (method == "portal") out["portal"] = portal.ToJson();

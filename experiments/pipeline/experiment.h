@@ -39,6 +39,9 @@ struct Experiment {
   InitialGuessStageOptions initial;
   std::vector<OptimizeStageOptions> optimizers;  // at least one, unique names
   MeshStageOptions mesh;
+  // The intricate surface of the same map (the triptych's (c), experiments/pipeline/triptych.h):
+  // the mesh stage's settings with IntricateDefaults.
+  MeshStageOptions intricate;
   // modulus, portal
   ModulusStageOptions modulus;
   PortalStageOptions portal;

@@ -33,7 +33,24 @@ const Schema<PicturesOptions>& PicturesOptions::Settings() {
           .Integer(
               "render_views", "--views", "Views of the render: front, side, top, three-quarter",
               [](auto& o) -> int& { return o.render.views; }, 1, 4)
-          .Doc("views of `render.png`: front, side, top, three-quarter");
+          .Doc("views of `render.png`: front, side, top, three-quarter")
+          .Choice(
+              "render_shading", "--shading",
+              "Shading of the renders: depth (ray-traced ambient occlusion, soft shadows, ground) or flat (Lambert)",
+              [](auto& o) -> std::string& { return o.render.shading; }, {"depth", "flat"})
+          .Integer(
+              "render_samples", "--samples", "Camera rays per pixel of the renders (depth shading)",
+              [](auto& o) -> int& { return o.render.samples; }, 1, 256)
+          .Integer(
+              "render_ao_rays", "--ao-rays", "Ambient-occlusion rays per camera ray of the renders (depth shading)",
+              [](auto& o) -> int& { return o.render.ao_rays; }, 0, 256)
+          .Boolean("triptych", "", "The triptych: target, Julia set and intricate surface rendered alike",
+                   [](auto& o) -> bool& { return o.triptych; })
+          .Doc("the 2015 paper's Fig. 1 for the run's mesh, `triptych/`: the target, the Julia set and the intricate "
+               "surface (`intricate`) rendered alike; report.md opens with it")
+          .Integer(
+              "triptych_size", "", "Pixels per panel of the triptych", [](auto& o) -> int& { return o.triptych_size; },
+              64, 4096);
   return s;
 }
 

@@ -18,7 +18,9 @@ struct PicturesOptions {
   bool enabled = true;         // quijibo run
   int slice_iterations = 1;    // n of the slices against the target: the one-step set the energy fits
   mesh::SliceView slice;       // size (the run: axis z at 0 over the target's box)
-  mesh::RenderOptions render;  // size and views of the render
+  mesh::RenderOptions render;  // size, views and shading of the renders
+  bool triptych = true;        // quijibo run: the triptych (experiments/pipeline/triptych.h)
+  int triptych_size = 480;     // pixels per panel of the triptych
 
   std::string Validate() const;
   static const Schema<PicturesOptions>& Settings();

@@ -5,6 +5,7 @@
 
 #include "experiments/pipeline/quality.h"
 #include "experiments/pipeline/run.h"
+#include "experiments/pipeline/triptych.h"
 #include "util/io.h"
 #include "quijibo/rational_map.h"
 
@@ -185,7 +186,8 @@ std::string RunReport(const Experiment& e, const std::vector<StageRecord>& recor
   if (!e.description.empty()) md << e.description << "\n\n";
   md << "Experiment `" << e.path << "` (resolved: `experiment.resolved.json`), method " << e.method << ", run " << date
      << ", " << Fixed(total_seconds, 1) << " s " << (incomplete ? "so far" : "in all") << ".\n\n";
-  md << QualitySection(RunQuality(e, results));  // first: what the figures below are worth
+  if (e.method == "quijibo") md << TriptychSection(results);  // first: the result, as the paper's Fig. 1
+  md << QualitySection(RunQuality(e, results));  // then what the figures below are worth
   InitialSection(page);
   if (e.method == "quijibo") {
     md << "## Optimization\n\n";

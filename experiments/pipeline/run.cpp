@@ -18,6 +18,7 @@
 
 #include "experiments/pipeline/plot.h"
 #include "experiments/pipeline/quality.h"
+#include "experiments/pipeline/triptych.h"
 #include "mesh/fidelity.h"
 #include "mesh/sdf_command.h"
 #include "util/error.h"
@@ -210,7 +211,9 @@ class Runner {
   std::string InitialStage();
   std::vector<std::string> OptimizeStages(const std::string& initial_hash);
   void PlotStage(const std::vector<std::string>& opt_hashes);
-  std::string MeshStage(const std::string& chosen_hash, const std::string& map_path);
+  std::string MeshStage(const std::string& folder, const MeshStageOptions& options, const std::string& chosen_hash,
+                        const std::string& map_path);
+  void TriptychStage(const std::vector<std::string>& upstream, const std::string& map_path);
   void FidelityStage(const std::string& initial_hash, const std::string& chosen_hash, const std::string& map_path);
 
   const Experiment& e_;
@@ -276,16 +279,20 @@ class SignalWatcher {
 
 void Runner::Quijibo() {
   const bool plot = e_.outputs.plot;
-  total_ = 2 + int(e_.optimizers.size()) + (plot ? 1 : 0) + (e_.mesh.enabled ? 1 : 0) + (e_.pictures.enabled ? 1 : 0);
-  downstream_["initial"] = {"plot", "mesh", "pictures", "fidelity"};
+  const bool intricate = e_.intricate.enabled, triptych = e_.pictures.enabled && e_.pictures.triptych;
+  total_ = 2 + int(e_.optimizers.size()) + (plot ? 1 : 0) + (e_.mesh.enabled ? 1 : 0) + (e_.pictures.enabled ? 1 : 0) +
+           (intricate ? 1 : 0) + (triptych ? 1 : 0);
+  downstream_["initial"] = {"plot", "mesh", "pictures", "fidelity", "intricate", "triptych"};
   for (const OptimizeStageOptions& o : e_.optimizers) {
     downstream_["initial"].push_back(o.name);
     downstream_[o.name] = {"plot"};
     if (o.name == e_.chosen_optimizer().name)
-      downstream_[o.name].insert(downstream_[o.name].end(), {"mesh", "pictures", "fidelity"});
+      downstream_[o.name].insert(downstream_[o.name].end(), {"mesh", "pictures", "fidelity", "triptych"});
+    if (o.name == e_.intricate.optimizer) downstream_[o.name].push_back("intricate");
     in_place_.insert(o.name);
   }
-  downstream_["mesh"] = {"pictures"};
+  downstream_["mesh"] = {"pictures", "triptych"};
+  downstream_["intricate"] = {"triptych"};
 
   const std::string initial_hash = InitialStage();
   const std::vector<std::string> opt_hashes = OptimizeStages(initial_hash);
@@ -293,7 +300,18 @@ void Runner::Quijibo() {
   const OptimizeStageOptions& chosen = e_.chosen_optimizer();
   const std::string chosen_hash = opt_hashes[std::size_t(&chosen - e_.optimizers.data())];
   const std::string map_path = P(chosen.name + "/map.json");
-  const std::string mesh_hash = e_.mesh.enabled ? MeshStage(chosen_hash, map_path) : std::string();
+  const std::string mesh_hash = e_.mesh.enabled ? MeshStage("mesh", e_.mesh, chosen_hash, map_path) : std::string();
+  std::string intricate_hash;
+  std::error_code ec;
+  // Switched off: an earlier run's surface or triptych is not this run's result.
+  if (!intricate) fs::remove_all(P("intricate"), ec);
+  if (!triptych) fs::remove_all(P("triptych"), ec);
+  if (intricate) {
+    const auto& io = *std::find_if(e_.optimizers.begin(), e_.optimizers.end(),
+                                   [&](const OptimizeStageOptions& o) { return o.name == e_.intricate.optimizer; });
+    intricate_hash = MeshStage("intricate", e_.intricate, opt_hashes[std::size_t(&io - e_.optimizers.data())],
+                               P(io.name + "/map.json"));
+  }
   // The optimized set against the target, and the mesh rendered.
   if (e_.pictures.enabled)
     cache_.Run("pictures", "pictures", e_.pictures.ToJson(), {}, {initial_hash, chosen_hash, mesh_hash},
@@ -303,6 +321,7 @@ void Runner::Quijibo() {
                           has_mesh ? P("mesh/julia.ply") : "", dir);
                });
   FidelityStage(initial_hash, chosen_hash, map_path);
+  if (triptych) TriptychStage({initial_hash, chosen_hash, mesh_hash, intricate_hash}, map_path);
 }
 
 // The target grid and the initial map.
@@ -366,17 +385,31 @@ void Runner::PlotStage(const std::vector<std::string>& opt_hashes) {
   });
 }
 
-// The chosen optimizer's map meshed, with its detail against the target mesh.
-std::string Runner::MeshStage(const std::string& chosen_hash, const std::string& map_path) {
-  return cache_.Run("mesh", "mesh", e_.mesh.ToJson(), {}, {chosen_hash}, [&](const std::string& dir) {
-    MeshStageOptions mo = e_.mesh;
+// The chosen optimizer's map meshed (`folder` "mesh" with the mesh stage's settings, "intricate"
+// with the intricate surface's), with its detail against the target mesh.
+std::string Runner::MeshStage(const std::string& folder, const MeshStageOptions& options,
+                              const std::string& chosen_hash, const std::string& map_path) {
+  const std::string title = folder == "mesh" ? "mesh" : "mesh (" + folder + " surface)";
+  return cache_.Run(title, folder, options.ToJson(), {}, {chosen_hash}, [&, folder](const std::string& dir) {
+    MeshStageOptions mo = options;
     mo.meshing.show_progress = true;
     const MeshFiles f{dir + "/julia.ply", mo.obj ? dir + "/julia.obj" : "", mo.vdb ? dir + "/julia.vdb" : ""};
     const RationalMap map = ReadMap(map_path);
-    const MeshStageResult r = MeshJulia(map, mo);
+    MeshStageResult r;
+    try {
+      r = MeshJulia(map, mo);
+    } catch (const Error& x) {
+      // The intricate surface is an extra: a map it cannot be made of (no inside deep enough for the
+      // translation by potential) is reported, and the run goes on.
+      if (folder == "mesh") throw;
+      if (!quiet_) std::fprintf(stderr, "quijibo: no %s surface: %s\n", folder.c_str(), x.what());
+      WriteFileAtomically(dir + "/summary.json", json({{"skipped", x.what()}, {"triangles", 0}}).dump(2) + "\n");
+      return;
+    }
     // A set without surface in the box is a result: the summary says 0 triangles, the report why.
     if (r.empty() && !quiet_)
-      std::fprintf(stderr, "quijibo: the surface does not cross the box (no triangles): no mesh written\n");
+      std::fprintf(stderr, "quijibo: the %s surface does not cross the box (no triangles): no mesh written\n",
+                   folder == "mesh" ? "" : (folder + " ").c_str());
     WriteMeshFiles(r, mo, f);
     json summary = MeshSummary(r, mo, map_path, f);
     // How much fractal detail the set has, against the target mesh (mesh/fidelity.h).
@@ -418,6 +451,45 @@ void Runner::FidelityStage(const std::string& initial_hash, const std::string& c
                                              qo);
                WriteFileAtomically(dir + "/fidelity.json", q.dump(1) + "\n");
              });
+}
+
+// The triptych: the target, the Julia set and the intricate surface rendered alike, with their figures.
+void Runner::TriptychStage(const std::vector<std::string>& upstream, const std::string& map_path) {
+  const TargetOptions& t = *e_.target;
+  // The target mesh is in the user's frame: the panels are comparable when the meshes are too.
+  const bool with_target = !t.mesh.empty() && e_.mesh.frame == "user" && e_.intricate.frame == "user";
+  std::vector<std::string> files;
+  if (with_target) files.push_back(t.mesh);
+  const json inputs = {{"pictures", e_.pictures.ToJson()}, {"lattice", kTriptychLattice}, {"target", with_target}};
+  cache_.Run("triptych", "triptych", inputs, files, upstream, [&](const std::string& dir) {
+    const std::string set = P("mesh/julia.ply"), intricate = P("intricate/julia.ply");
+    if (!fs::exists(set) && !fs::exists(intricate)) {
+      WriteFileAtomically(dir + "/no-triptych.txt", "no triptych: neither the set nor the intricate surface has a mesh\n");
+      return;
+    }
+    json out = RenderTriptych(with_target ? t.mesh : "", fs::exists(set) ? set : "",
+                              fs::exists(intricate) ? intricate : "", e_.pictures.render, e_.pictures.triptych_size,
+                              dir);
+    const RationalMap map = ReadMap(map_path);
+    const ScalarGrid target = ReadGrid(P("initial/target.qgrid"));
+    std::optional<mesh::TriangleMesh> shape;
+    json figures = {{"lattice", kTriptychLattice}, {"closing", mesh::FidelityOptions().closing}};
+    if (with_target) {
+      shape = mesh::ReadMesh(t.mesh);
+      figures["target"] = {{"triangles", shape->triangles.size()},
+                           {"detail", mesh::MeasureMeshDetail(*shape, &*shape,
+                                                              (1.0 - 2.0 * map.frame.padding) / map.frame.scale)
+                                          .ToJson()}};
+    }
+    if (fs::exists(set))
+      figures["set"] = SetFigures(map, target, e_.mesh, mesh::ReadMesh(set), shape ? &*shape : nullptr,
+                                  kTriptychLattice);
+    if (fs::exists(intricate))
+      figures["intricate"] = SetFigures(map, target, e_.intricate, mesh::ReadMesh(intricate),
+                                        shape ? &*shape : nullptr, kTriptychLattice);
+    out["figures"] = figures;
+    WriteFileAtomically(dir + "/triptych.json", out.dump(1) + "\n");
+  });
 }
 
 void Runner::RenderStage(const std::string& mesh, const std::string& upstream) {

@@ -1017,4 +1017,25 @@ PYBIND11_MODULE(quijibo, m) {
         "as keywords with the experiment's names: escape, iso, frame ('user': the input mesh's coordinates, or "
         "'fractal'), precision, box [xmin, ymin, zmin, xmax, ymax, zmax] (fractal frame; default: the normalized "
         "unit cube), ... An empty set raises quijibo.Error unless allow_empty=True.");
+  m.def(
+      "render",
+      [](const MeshResult& mesh_in, py::kwargs kwargs) {
+        // The pictures settings of the experiment (render_size, render_views, render_shading, ...).
+        json settings = ToJson(kwargs, "render");
+        const pipeline::PicturesOptions o = OptionsFrom<pipeline::PicturesOptions>(settings, "render");
+        const mesh::TriangleMesh t = ToTriangleMesh(mesh_in.vertices.cast<Array>(),
+                                                    mesh_in.faces.cast<py::array_t<std::int64_t, py::array::c_style |
+                                                                                                       py::array::forcecast>>());
+        Image image(1, 1);
+        {
+          py::gil_scoped_release release;
+          image = mesh::RenderMesh(t, o.render);
+        }
+        return ImageArray(image);
+      },
+      py::arg("mesh"),
+      "Render a mesh (`quijibo picture render`): views side by side, ray-traced with ambient occlusion, soft "
+      "shadows and a ground (render_shading='flat': the z-buffer and Lambert shading). Settings as keywords with "
+      "the experiment's pictures names: render_size (pixels per view), render_views (1-4: front, side, top, "
+      "three-quarter), render_shading, render_samples, render_ao_rays. Returns an (H, W, 3) uint8 array.");
 }

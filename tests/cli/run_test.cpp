@@ -71,7 +71,8 @@ json Tiny() {
           {"optimizer",
            {{"schedule", "10(VF)20(VF)"}, {"max_iterations", {{"V", 8}, {"F", 15}}}, {"checkpoint_every", 5}}},
           {"mesh", {{"resolution", 20}, {"iterations", 1}}},
-          {"pictures", {{"slice_size", 48}, {"render_size", 48}, {"render_views", 2}}},
+          {"intricate", {{"resolution", 20}}},
+          {"pictures", {{"slice_size", 48}, {"render_size", 48}, {"render_views", 2}, {"triptych_size", 64}}},
           {"outputs", {{"plot", HaveGnuplot()}}}};
 }
 
@@ -87,7 +88,8 @@ TEST(RunTest, ATinyExperimentRunsEndToEndAndIsReusedWhenUnchanged) {
   for (const char* f : {"experiment.resolved.json", "run.json", "report.md", "initial/target.qgrid",
                         "initial/target.frame.json", "initial/map.json", "optimized/map.json", "optimized/log.jsonl",
                         "optimized/summary.json", "optimized/checkpoint.json", "mesh/julia.ply", "mesh/julia.vdb",
-                        "mesh/summary.json", "pictures/slice-n1.png", "pictures/render.png"})
+                        "mesh/summary.json", "pictures/slice-n1.png", "pictures/render.png",
+                        "intricate/summary.json", "triptych/triptych.json", "triptych/set.png", "triptych/triptych.png"})
     EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
   if (HaveGnuplot()) {
     EXPECT_TRUE(fs::exists(out + "/plot/convergence.png"));
@@ -117,7 +119,7 @@ TEST(RunTest, ATinyExperimentRunsEndToEndAndIsReusedWhenUnchanged) {
   ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
   for (const json& s : json(RunRecord(out)["stages"])) {
     const std::string name = s["stage"];
-    EXPECT_EQ(s["status"], name == "mesh" || name == "pictures" ? "ran" : "reused") << s;
+    EXPECT_EQ(s["status"], name == "mesh" || name == "pictures" || name == "triptych" ? "ran" : "reused") << s;
   }
   EXPECT_EQ(json::parse(Slurp(out + "/mesh/summary.json"))["resolution"], 22);
   fs::remove_all(dir);
@@ -140,6 +142,55 @@ TEST(RunTest, AMeshTargetGoesThroughTheMonopoleStage) {
                         "pictures/slice-n1.png", "report.md"})
     EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
   EXPECT_NE(Slurp(out + "/report.md").find("Initial guess"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// Every run with a mesh target ends with the triptych (the 2015 paper's Fig. 1 for the user's mesh):
+// the target, the set and the intricate surface rendered alike, report.md opening with them and a
+// line of figures under each; the intricate surface a result like the mesh (PLY, VDB, summary).
+TEST(RunTest, AMeshTargetEndsWithTheTriptych) {
+  const std::string dir = TempDir("triptych");
+  const std::string exp = dir + "/bunny.json", out = dir + "/results";
+  const json e = {{"target", {{"mesh", std::string(QUIJIBO_SOURCE_DIR) + "/data/bunny.obj"}, {"resolution", 25}}},
+                  {"optimizer", {{"schedule", "25(VF)"}, {"max_iterations", {{"V", 3}, {"F", 3}}}}},
+                  {"mesh", {{"resolution", 32}}},
+                  {"intricate", {{"resolution", 32}}},
+                  {"pictures", {{"slice_size", 32}, {"render_size", 32}, {"triptych_size", 64}}},
+                  {"outputs", {{"plot", false}}}};
+  Write(exp, e.dump(1));
+  std::string err;
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  for (const char* f : {"intricate/julia.ply", "intricate/julia.vdb", "intricate/summary.json", "triptych/target.png",
+                        "triptych/set.png", "triptych/intricate.png", "triptych/triptych.png", "triptych/triptych.json"})
+    EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
+  const json t = json::parse(Slurp(out + "/triptych/triptych.json"));
+  EXPECT_EQ(t["panels"], json({"target", "set", "intricate"}));
+  // The intricate surface is translated (by the potential -2) and has more area than the set.
+  const json is = json::parse(Slurp(out + "/intricate/summary.json"));
+  EXPECT_EQ(is["iteration_frame"]["translate_potential"], -2.0);
+  EXPECT_EQ(is["iteration_frame"]["detail"], 4.0);
+  EXPECT_GT(std::abs(is["julia"]["root_translation"][2].get<double>()), 0.0);
+  const json& f = t["figures"];
+  EXPECT_GT(f["intricate"]["detail"]["area_ratio"].get<double>(), f["set"]["detail"]["area_ratio"].get<double>());
+  EXPECT_GT(f["set"]["fidelity"]["n_step_closed_iou"].get<double>(), 0.5);
+  // report.md opens with the triptych: the three titles, the pictures, then the Quality section.
+  const std::string report = Slurp(out + "/report.md");
+  const auto a = report.find("(a) the target"), pics = report.find("triptych/intricate.png"),
+             q = report.find("## Quality");
+  ASSERT_NE(a, std::string::npos) << report;
+  EXPECT_NE(report.find("(c) intricate, detail 4.00, L = -2.00 at −t"), std::string::npos) << report;
+  EXPECT_LT(a, pics);
+  EXPECT_LT(pics, q);
+  EXPECT_NE(report.find("closed IoU"), std::string::npos);
+  // Switched off, neither the intricate surface nor the triptych is made.
+  json off = e;
+  off["intricate"] = {{"enabled", false}};
+  off["pictures"]["triptych"] = false;
+  Write(exp, off.dump(1));
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  EXPECT_FALSE(fs::exists(out + "/intricate"));
+  EXPECT_FALSE(fs::exists(out + "/triptych"));
+  EXPECT_EQ(Slurp(out + "/report.md").find("(a) the target"), std::string::npos);
   fs::remove_all(dir);
 }
 
@@ -397,7 +448,7 @@ TEST(RunTest, AnInterruptInEachStageLeavesAnIncompleteReportAndNoStaleOutputs) {
   json changed = Tiny();
   changed["initial"]["root_radius"] = 1.1;  // every stage computes again
   Write(exp, changed.dump(1));
-  std::vector<std::string> stages = {"initial", "optimized", "mesh", "pictures", "fidelity"};
+  std::vector<std::string> stages = {"initial", "optimized", "mesh", "intricate", "pictures", "fidelity", "triptych"};
   if (HaveGnuplot()) stages.insert(stages.begin() + 2, "plot");
   for (std::size_t k = 0; k < stages.size(); ++k) {
     const std::string& stage = stages[k];
@@ -406,7 +457,9 @@ TEST(RunTest, AnInterruptInEachStageLeavesAnIncompleteReportAndNoStaleOutputs) {
     EXPECT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err, nullptr, 0, "QUIJIBO_TEST_SIGNAL_IN_STAGE=" + stage),
               130)
         << stage << ": " << err;
-    interrupt::ExpectInterruptLine(err, stage == "optimized" ? "optimize (optimized" : stage);
+    interrupt::ExpectInterruptLine(err, stage == "optimized"   ? "optimize (optimized"
+                                        : stage == "intricate" ? "mesh (intricate surface)"
+                                                               : stage);
     const std::string report = Slurp(out + "/report.md");
     EXPECT_EQ(report.rfind("# tiny (INCOMPLETE)", 0), 0u) << stage << ": " << report;
     EXPECT_NE(report.find("**INCOMPLETE:** the run stopped in stage"), std::string::npos) << report;

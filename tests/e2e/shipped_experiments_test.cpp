@@ -70,9 +70,11 @@ json Shrink(json e) {
       }
     }
   if (e.contains("mesh")) e["mesh"]["resolution"] = 24;
+  if (e.contains("intricate")) e["intricate"]["resolution"] = 24;
   if (e.contains("pictures")) {
     e["pictures"]["slice_size"] = 32;
     e["pictures"]["render_size"] = 32;
+    e["pictures"]["triptych_size"] = 64;
   }
   for (const char* method : {"modulus", "portal"})
     if (e.contains(method)) {
@@ -95,8 +97,10 @@ std::vector<std::string> ExpectedStages(const json& e) {
   for (const json& o : e["optimizer"]) s.push_back("optimize " + o["name"].get<std::string>());
   if (e["outputs"]["plot"].get<bool>()) s.push_back("plot");
   if (e["mesh"]["enabled"].get<bool>()) s.push_back("mesh");
+  if (e["intricate"]["enabled"].get<bool>()) s.push_back("mesh (intricate surface)");
   if (e["pictures"]["enabled"].get<bool>()) s.push_back("pictures");
   s.push_back("fidelity");  // report.md's Quality figures
+  if (e["pictures"]["enabled"].get<bool>() && e["pictures"]["triptych"].get<bool>()) s.push_back("triptych");
   return s;
 }
 

@@ -62,3 +62,16 @@ def test_ctrl_c_stops_a_long_mesh(handler):
         timer.cancel()
         signal.signal(signal.SIGINT, old)
     assert time.monotonic() - t0 < 20
+
+
+def test_render_with_depth_and_flat(tiny_case):
+    mesh = quijibo.mesh(tiny_case["rational_map"], resolution=24, iterations=1)
+    depth = quijibo.render(mesh, render_size=48, render_views=2, render_samples=2, render_ao_rays=4)
+    assert depth.shape == (48, 96, 3) and depth.dtype == np.uint8
+    flat = quijibo.render(mesh, render_size=48, render_views=2, render_shading="flat")
+    assert flat.shape == depth.shape
+    # The ray-traced picture has a ground and shading where the Lambert one is white background.
+    assert not np.array_equal(depth, flat)
+    assert len(np.unique(depth.reshape(-1, 3), axis=0)) > 20
+    with pytest.raises(quijibo.Error, match="render_shading"):
+        quijibo.render(mesh, render_shading="glossy")

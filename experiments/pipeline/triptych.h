@@ -1,0 +1,50 @@
+// The 2015 paper's Fig. 1 for the user's mesh, at the end of every QUIJIBO run: (a) the target,
+// (b) the Julia set as the mesh stage makes it, (c) an intricate surface of the same map (fractal
+// detail and the root translation by potential, docs/meshing.md "The triptych"), rendered alike
+// side by side, with one line of figures under each (report.md opens with it).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "experiments/pipeline/mesh.h"
+#include "mesh/render.h"
+#include "mesh/triangle_mesh.h"
+#include "quijibo/grid.h"
+#include "quijibo/rational_map.h"
+
+namespace quijibo::pipeline {
+
+// The intricate surface's settings before the experiment's "intricate" section is read: the mesh
+// stage's (n, escape, iso, precision, kernel, which optimizer, and whether it is on: an experiment
+// without meshes gets none) with detail 4, the translation by potential -2 along z in the map's
+// frame, 128^3 cells, a .vdb. Why these: docs/meshing.md
+// "The triptych" (measured on the shape suite).
+MeshStageOptions IntricateDefaults(const MeshStageOptions& mesh);
+
+// The figures of a meshed set on the triptych's line, as JSON:
+//   "detail"   MeasureMeshDetail against `shape` (area ratio, components, box-counting dimension),
+//              when `shape` is not null (it and `set` in the same frame, the user's);
+//   "fidelity" the n-step set of `map` as `o` iterates it (its detail, frame and translation) on
+//              the fidelity lattice of `lattice`^3 nodes over the target grid `target`: n-step IoU,
+//              closed IoU, leak (mesh/fidelity.h).
+nlohmann::json SetFigures(const RationalMap& map, const ScalarGrid& target, const MeshStageOptions& o,
+                          const mesh::TriangleMesh& set, const mesh::TriangleMesh* shape, int lattice);
+
+// The lattice of SetFigures in a run: 64 nodes per axis, where the closing (2 cells) is about 4 %
+// of the shape's size, so that pores and channels finer than that count as filled.
+inline constexpr int kTriptychLattice = 64;
+
+// The three renders of the triptych into `dir`: target.png, set.png, intricate.png (each
+// `size` pixels square, one three-quarter view, framed alike on the target mesh) and
+// triptych.png (the three side by side). A path may be empty (that panel is left out). Returns
+// {"seconds": ..., "panels": [...], "triangles": [...]}.
+nlohmann::json RenderTriptych(const std::string& target_mesh, const std::string& set_mesh,
+                              const std::string& intricate_mesh, const mesh::RenderOptions& render, int size,
+                              const std::string& dir);
+
+// report.md's opening triptych (Markdown) from the results folder's files; "" when the run drew
+// none.
+std::string TriptychSection(const std::string& results);
+
+}  // namespace quijibo::pipeline
