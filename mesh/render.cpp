@@ -273,17 +273,17 @@ Image TraceView(const Scene& scene, const Camera& cam, double radius, const Rend
           ng = hit.geometric, ns = hit.shading;
         }
         const V3 q = p + eps * ng;
-        // Ambient occlusion: cosine-weighted rays about the shading normal.
+        // Ambient occlusion: cosine-weighted rays about the face's normal (the interpolated one of a
+        // coarse mesh leans across its edges).
         double open = 1;
         if (o.ao_rays > 0) {
           V3 t, b;
-          Basis(ns, t, b);
+          Basis(ng, t, b);
           int free = 0;
           for (int k = 0; k < o.ao_rays; ++k) {
             const double r1 = rng.Uniform(), r2 = rng.Uniform();
             const double rr = std::sqrt(r1), phi = 2 * M_PI * r2;
-            V3 dir = Normalized(rr * std::cos(phi) * t + rr * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - r1)) * ns);
-            if (Dot(dir, ng) <= 0) dir = dir - (2 * Dot(dir, ng)) * ng;  // below the face: mirrored above it
+            const V3 dir = Normalized(rr * std::cos(phi) * t + rr * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - r1)) * ng);
             ++ao_rays;
             bool blocked = scene.Occluded(q, dir, reach);
             if (!blocked && o.ground && !on_ground && dir.y < 0) blocked = (ground - q.y) / dir.y < reach;

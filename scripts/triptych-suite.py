@@ -68,18 +68,17 @@ def main():
             continue
         t = json.load(open(os.path.join(a.out, name, "triptych/triptych.json")))
         isum = json.load(open(os.path.join(a.out, name, "intricate/summary.json")))
-        f = t["figures"]
+        msum = json.load(open(os.path.join(a.out, name, "mesh/summary.json")))
+        fset = json.load(open(os.path.join(a.out, name, "fidelity/fidelity.json")))
+        fint = t["figures"].get("intricate", {}).get("fidelity", {})
 
-        def cells(key):
-            x = f.get(key)
-            if not x:
-                return "–", "–", "–", "–", "–"
-            d, fid = x.get("detail", {}), x.get("fidelity", {})
+        def cells(summary, fid):
+            d = summary.get("detail", {})
+            n = fid.get("n_step", {})
             return (f"{d.get('area_ratio', 0):.2f}", f"{d.get('box_dimension', 0):.3f}",
-                    f"{fid.get('n_step_closed_iou', 0):.3f}", f"{fid.get('n_step', {}).get('iou', 0):.3f}",
-                    str(d.get("components", "–")))
+                    f"{n.get('closed_iou', 0):.3f}", f"{n.get('iou', 0):.3f}", str(d.get("components", "–")))
 
-        s, i = cells("set"), cells("intricate")
+        s, i = cells(msum, fset), cells(isum, fint)
         tr = isum.get("julia", {}).get("root_translation")
         tlen = f"{(tr[0] ** 2 + tr[1] ** 2 + tr[2] ** 2) ** 0.5:.3f}" if tr else isum.get("skipped", "–")
         rows.append(f"| {name} | {s[0]} / {i[0]} | {s[1]} / {i[1]} | {s[2]} / {i[2]} | {s[3]} / {i[3]} | "

@@ -44,13 +44,13 @@ const Schema<FilmOptions>& FilmOptions::Settings() {
                   [](auto& o) -> std::string& { return o.name; })
           .String("description", "", "What the film shows", [](auto& o) -> std::string& { return o.description; })
           .Path("map", "--map", "The map the film moves through (map.json)",
-                [](auto& o) -> std::string& { return o.map; })
+                [](auto& o) -> std::optional<std::string>& { return o.map; })
           .Path("experiment", "--experiment",
                 "Or an experiment whose results hold the map (its mesh stage's optimizer's map.json)",
-                [](auto& o) -> std::string& { return o.experiment; })
+                [](auto& o) -> std::optional<std::string>& { return o.experiment; })
           .Path(
               "results", "--results", "That experiment's results folder (default: where `quijibo run` puts it)",
-              [](auto& o) -> std::string& { return o.results; }, false)
+              [](auto& o) -> std::optional<std::string>& { return o.results; }, false)
           .Choice("vary", "--vary", "The setting that moves", [](auto& o) -> std::string& { return o.vary; },
                   kFilmSettings)
           .Doc("the setting that moves: `translate_potential`, `translation` (length along `mesh.translate`'s "
@@ -78,7 +78,8 @@ const Schema<FilmOptions>& FilmOptions::Settings() {
           .Number(
               "elevation", "--elevation", "The camera's elevation, degrees", [](auto& o) -> double& { return o.elevation; },
               -90, 90)
-          .Boolean("video", "", "Also write film.mp4 (ffmpeg)", [](auto& o) -> bool& { return o.video; })
+          .Boolean("video", "--no-video", "Also write film.mp4 (ffmpeg); --no-video: the frames only",
+                   [](auto& o) -> bool& { return o.video; })
           .Integer(
               "render/size", "--size", "Pixels of a frame (square)", [](auto& o) -> int& { return o.render.size; }, 16,
               8192)
@@ -95,8 +96,8 @@ const Schema<FilmOptions>& FilmOptions::Settings() {
 }
 
 std::string FilmOptions::Validate() const {
+  if (bool(map) == bool(experiment)) return "give the map (\"map\", --map) or an experiment (\"experiment\"), one of them";
   if (std::string why = Settings().Check(*this); !why.empty()) return why;
-  if (map.empty() == experiment.empty()) return "give the map (\"map\", --map) or an experiment (\"experiment\"), one of them";
   if ((vary == "translate_potential" || vary == "translation" || vary == "detail" || vary == "iterations" ||
        vary == "exponent") &&
       !to)
@@ -142,15 +143,14 @@ json FilmOptions::ToJson() const {
 }
 
 std::string FilmOptions::MapPath() const {
-  if (!map.empty()) return map;
-  const Experiment e = Experiment::FromFile(experiment);
-  if (e.method != "quijibo") throw Error(experiment + ": a film needs a QUIJIBO experiment (method quijibo)");
-  const std::string folder =
-      !results.empty() ? results : e.outputs.folder ? *e.outputs.folder : "results/" + e.name;
+  if (map) return *map;
+  const Experiment e = Experiment::FromFile(*experiment);
+  if (e.method != "quijibo") throw Error(*experiment + ": a film needs a QUIJIBO experiment (method quijibo)");
+  const std::string folder = results ? *results : e.outputs.folder ? *e.outputs.folder : "results/" + e.name;
   const std::string path = folder + "/" + e.mesh.optimizer + "/map.json";
   if (!fs::exists(path))
-    throw Error(path + ": no map yet: run the experiment first (quijibo run " + experiment +
-                (results.empty() ? "" : " --out " + results) + "), or give \"results\"");
+    throw Error(path + ": no map yet: run the experiment first (quijibo run " + *experiment +
+                (results ? " --out " + *results : std::string()) + "), or give \"results\"");
   return path;
 }
 

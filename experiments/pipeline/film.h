@@ -37,9 +37,9 @@ inline const std::vector<std::string> kFilmSettings = {"translate_potential", "t
 struct FilmOptions {
   std::string name;         // default: the film file's name
   std::string description;
-  std::string map;          // map.json; or
-  std::string experiment;   // an experiment whose results hold the map (its mesh stage's optimizer)
-  std::string results;      // that experiment's results folder (default: as `quijibo run` puts it)
+  std::optional<std::string> map;         // map.json; or
+  std::optional<std::string> experiment;  // an experiment whose results hold the map (its mesh stage's optimizer)
+  std::optional<std::string> results;     // that experiment's results folder (default: as `quijibo run` puts it)
   std::string vary = "translate_potential";
   std::optional<double> from;
   std::optional<double> to;

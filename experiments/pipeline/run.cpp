@@ -460,7 +460,7 @@ void Runner::TriptychStage(const std::vector<std::string>& upstream, const std::
   const bool with_target = !t.mesh.empty() && e_.mesh.frame == "user" && e_.intricate.frame == "user";
   std::vector<std::string> files;
   if (with_target) files.push_back(t.mesh);
-  const json inputs = {{"pictures", e_.pictures.ToJson()}, {"lattice", kTriptychLattice}, {"target", with_target}};
+  const json inputs = {{"pictures", e_.pictures.ToJson()}, {"target", with_target}};
   cache_.Run("triptych", "triptych", inputs, files, upstream, [&](const std::string& dir) {
     const std::string set = P("mesh/julia.ply"), intricate = P("intricate/julia.ply");
     if (!fs::exists(set) && !fs::exists(intricate)) {
@@ -470,23 +470,21 @@ void Runner::TriptychStage(const std::vector<std::string>& upstream, const std::
     json out = RenderTriptych(with_target ? t.mesh : "", fs::exists(set) ? set : "",
                               fs::exists(intricate) ? intricate : "", e_.pictures.render, e_.pictures.triptych_size,
                               dir);
+    // The target's own detail, and the intricate surface's fidelity on the lattice the fidelity
+    // stage measures the set on (report.md takes the set's and the meshes' detail from their stages).
+    const QualityOptions quality;
+    json figures = {{"lattice", quality.lattice}, {"closing", mesh::FidelityOptions().closing}};
     const RationalMap map = ReadMap(map_path);
-    const ScalarGrid target = ReadGrid(P("initial/target.qgrid"));
-    std::optional<mesh::TriangleMesh> shape;
-    json figures = {{"lattice", kTriptychLattice}, {"closing", mesh::FidelityOptions().closing}};
     if (with_target) {
-      shape = mesh::ReadMesh(t.mesh);
-      figures["target"] = {{"triangles", shape->triangles.size()},
-                           {"detail", mesh::MeasureMeshDetail(*shape, &*shape,
-                                                              (1.0 - 2.0 * map.frame.padding) / map.frame.scale)
-                                          .ToJson()}};
+      const mesh::TriangleMesh shape = mesh::ReadMesh(t.mesh);
+      figures["target"] = {
+          {"triangles", shape.triangles.size()},
+          {"detail",
+           mesh::MeasureMeshDetail(shape, &shape, (1.0 - 2.0 * map.frame.padding) / map.frame.scale).ToJson()}};
     }
-    if (fs::exists(set))
-      figures["set"] = SetFigures(map, target, e_.mesh, mesh::ReadMesh(set), shape ? &*shape : nullptr,
-                                  kTriptychLattice);
     if (fs::exists(intricate))
-      figures["intricate"] = SetFigures(map, target, e_.intricate, mesh::ReadMesh(intricate),
-                                        shape ? &*shape : nullptr, kTriptychLattice);
+      figures["intricate"] = {
+          {"fidelity", SetFidelity(map, ReadGrid(P("initial/target.qgrid")), e_.intricate, quality.lattice)}};
     out["figures"] = figures;
     WriteFileAtomically(dir + "/triptych.json", out.dump(1) + "\n");
   });

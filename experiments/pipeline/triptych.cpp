@@ -29,12 +29,7 @@ MeshStageOptions IntricateDefaults(const MeshStageOptions& mesh) {
   return o;
 }
 
-json SetFigures(const RationalMap& map, const ScalarGrid& target, const MeshStageOptions& o,
-                const mesh::TriangleMesh& set, const mesh::TriangleMesh* shape, int lattice) {
-  json j = json::object();
-  j["triangles"] = set.triangles.size();
-  if (shape && !set.triangles.empty())
-    j["detail"] = mesh::MeasureMeshDetail(set, shape, (1.0 - 2.0 * map.frame.padding) / map.frame.scale).ToJson();
+json SetFidelity(const RationalMap& map, const ScalarGrid& target, const MeshStageOptions& o, int lattice) {
   // The set as the mesh shows it, without its placement (it moves the set off the target).
   mesh::FidelityOptions f;
   f.lattice = lattice;
@@ -49,8 +44,7 @@ json SetFigures(const RationalMap& map, const ScalarGrid& target, const MeshStag
   json fid = mesh::MeasureSets(map, target, f).ToJson();
   fid["lattice"] = lattice;
   fid["closing"] = f.closing;
-  j["fidelity"] = fid;
-  return j;
+  return fid;
 }
 
 json RenderTriptych(const std::string& target_mesh, const std::string& set_mesh, const std::string& intricate_mesh,
@@ -116,7 +110,7 @@ std::string FiguresLine(const json& f, bool is_target) {
       << Fixed(d.value("box_dimension", 0.0), 3) << ", ";
   const json fid = f.value("fidelity", json());
   if (fid.is_object() && fid.contains("n_step"))
-    s << "closed IoU " << Fixed(fid.value("n_step_closed_iou", 0.0), 3) << " (n-step IoU "
+    s << "closed IoU " << Fixed(fid["n_step"].value("closed_iou", 0.0), 3) << " (n-step IoU "
       << Fixed(fid["n_step"].value("iou", 0.0), 3) << "), ";
   if (d.is_object())
     s << d.value("components", 0LL) << (d.value("components", 0LL) == 1 ? " component" : " components");
@@ -128,8 +122,19 @@ std::string FiguresLine(const json& f, bool is_target) {
 std::string TriptychSection(const std::string& results) {
   const json t = ReadStageFile(results + "/triptych/triptych.json");
   if (!t.is_object() || !t.contains("panels")) return "";
-  const json figures = t.value("figures", json::object());
   const json ms = ReadStageFile(results + "/mesh/summary.json"), is = ReadStageFile(results + "/intricate/summary.json");
+  json figures = t.value("figures", json::object());
+  // The set's figures: its detail from the mesh stage, its fidelity from the fidelity stage.
+  const json fid = ReadStageFile(results + "/fidelity/fidelity.json");
+  if (ms.is_object() && ms.value("triangles", 0LL) > 0) {
+    figures["set"]["triangles"] = ms.value("triangles", 0LL);
+    if (ms.contains("detail")) figures["set"]["detail"] = ms["detail"];
+    if (fid.is_object() && fid.contains("n_step")) figures["set"]["fidelity"] = fid;
+  }
+  if (is.is_object() && is.value("triangles", 0LL) > 0) {
+    figures["intricate"]["triangles"] = is.value("triangles", 0LL);
+    if (is.contains("detail")) figures["intricate"]["detail"] = is["detail"];
+  }
   auto title = [&](const std::string& panel) -> std::string {
     if (panel == "target") return "(a) the target";
     if (panel == "set")
@@ -154,8 +159,8 @@ std::string TriptychSection(const std::string& results) {
   md << head.str() << "|\n" << rule.str() << "|\n" << pics.str() << "|\n" << line.str() << "|\n\n";
   md << "*The 2015 paper's Fig. 1 for this mesh: the same three-quarter view of each, ray-traced with ambient "
         "occlusion and soft shadows (`triptych/triptych.png`). Closed IoU: the n-step set after a closing of "
-     << figures.value("closing", 2) << " lattice cells (" << figures.value("lattice", kTriptychLattice)
-     << "³ lattice), its silhouette against the target; meshes `mesh/julia.ply` and `intricate/julia.ply`.*\n\n";
+     << figures.value("closing", 2) << " lattice cells on the Quality section's " << figures.value("lattice", 32)
+     << "³ lattice, its silhouette against the target; meshes `mesh/julia.ply` and `intricate/julia.ply`.*\n\n";
   return md.str();
 }
 

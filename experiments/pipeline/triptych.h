@@ -22,18 +22,12 @@ namespace quijibo::pipeline {
 // "The triptych" (measured on the shape suite).
 MeshStageOptions IntricateDefaults(const MeshStageOptions& mesh);
 
-// The figures of a meshed set on the triptych's line, as JSON:
-//   "detail"   MeasureMeshDetail against `shape` (area ratio, components, box-counting dimension),
-//              when `shape` is not null (it and `set` in the same frame, the user's);
-//   "fidelity" the n-step set of `map` as `o` iterates it (its detail, frame and translation) on
-//              the fidelity lattice of `lattice`^3 nodes over the target grid `target`: n-step IoU,
-//              closed IoU, leak (mesh/fidelity.h).
-nlohmann::json SetFigures(const RationalMap& map, const ScalarGrid& target, const MeshStageOptions& o,
-                          const mesh::TriangleMesh& set, const mesh::TriangleMesh* shape, int lattice);
-
-// The lattice of SetFigures in a run: 64 nodes per axis, where the closing (2 cells) is about 4 %
-// of the shape's size, so that pores and channels finer than that count as filled.
-inline constexpr int kTriptychLattice = 64;
+// The fidelity figures of the set `o` meshes (its detail, frame and translation) of `map` on the
+// lattice of `lattice`^3 nodes over the target grid `target` (mesh/fidelity.h: n-step IoU, closed
+// IoU, leak), as fidelity.json holds them for the mesh stage's set. The run measures the intricate
+// surface on the Quality section's lattice (QualityOptions::lattice, 32), as the set is measured
+// there, so the two lines of figures compare.
+nlohmann::json SetFidelity(const RationalMap& map, const ScalarGrid& target, const MeshStageOptions& o, int lattice);
 
 // The three renders of the triptych into `dir`: target.png, set.png, intricate.png (each
 // `size` pixels square, one three-quarter view, framed alike on the target mesh) and

@@ -170,9 +170,12 @@ TEST(RunTest, AMeshTargetEndsWithTheTriptych) {
   EXPECT_EQ(is["iteration_frame"]["translate_potential"], -2.0);
   EXPECT_EQ(is["iteration_frame"]["detail"], 4.0);
   EXPECT_GT(std::abs(is["julia"]["root_translation"][2].get<double>()), 0.0);
+  const json ms = json::parse(Slurp(out + "/mesh/summary.json"));
+  EXPECT_GT(is["detail"]["area_ratio"].get<double>(), ms["detail"]["area_ratio"].get<double>());
   const json& f = t["figures"];
-  EXPECT_GT(f["intricate"]["detail"]["area_ratio"].get<double>(), f["set"]["detail"]["area_ratio"].get<double>());
-  EXPECT_GT(f["set"]["fidelity"]["n_step_closed_iou"].get<double>(), 0.5);
+  EXPECT_GT(f["target"]["detail"]["box_dimension"].get<double>(), 1.5);
+  EXPECT_GT(f["intricate"]["fidelity"]["n_step"]["closed_iou"].get<double>(), 0.3);
+  EXPECT_EQ(f["intricate"]["fidelity"]["lattice"], 32);
   // report.md opens with the triptych: the three titles, the pictures, then the Quality section.
   const std::string report = Slurp(out + "/report.md");
   const auto a = report.find("(a) the target"), pics = report.find("triptych/intricate.png"),
