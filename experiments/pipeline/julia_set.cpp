@@ -25,7 +25,7 @@ JuliaSetStageOptions JuliaSetStageOptions::FromJson(const JsonReader& r, const s
     o.map_inline = r.at(m);
     if (o.map_inline.contains("file") && o.map_inline["file"].is_string())
       o.map_inline["file"] = ResolvePath(base, o.map_inline["file"].get<std::string>());
-    ReadKindMap(JsonReader(o.map_inline, r.source()), "", base.string());  // errors now, not when run
+    ReadKindMap(r, m, base.string());  // errors now, with the experiment's pointer, not when run
   } else {
     r.fail(m, "expected a map object {\"kind\": ...} or a file holding one");
   }
