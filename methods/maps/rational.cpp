@@ -1,5 +1,5 @@
 // Map kind "rational": a QUIJIBO map (map.json, 2015 Eqns 4 and 8) iterated in log-polar form
-// (quijibo/julia.h), with the mesh stage's detail and iteration frame (IterationMap).
+// (quijibo/julia.h), with the mesh stage's detail and iteration frame (MakeJuliaSetup).
 //   {"kind": "rational", "file": "map.json", "detail": percent (default 0.25, the mesh stage's),
 //    "iteration_frame": "map" or "reference"}
 // The region is the map's normalized cube in its iteration frame. The root translation and the
@@ -8,6 +8,7 @@
 
 #include "methods/map_kind.h"
 #include "quijibo/julia.h"
+#include "quijibo/julia_setup.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo {
@@ -27,7 +28,10 @@ MapKind MapKind_rational() {
     if (!(detail >= 0 && detail <= 100)) r.fail(p + "/detail", "expected a number in [0, 100]");
     const std::string frame = r.string_or(p + "/iteration_frame", "map");
     if (frame != "map" && frame != "reference") r.fail(p + "/iteration_frame", "expected \"map\" or \"reference\"");
-    const RationalMap map = IterationMap(ReadMap(file.string()), frame == "reference", detail);
+    JuliaSetupOptions setup;
+    setup.reference_frame = frame == "reference";
+    setup.detail = detail;
+    const RationalMap map = MakeJuliaSetup(ReadMap(file.string()), setup).map;
     auto rm = std::make_shared<RationalQuaternionMap>(map);
     KindMap m;
     m.map = rm;
