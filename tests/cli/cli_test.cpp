@@ -254,5 +254,21 @@ TEST_F(MapKindsCli, ExperimentAndPortalSceneTakeAMapObject) {
   EXPECT_EQ(report["result"]["escape_radius"], 4.0);
 }
 
+TEST_F(MapKindsCli, JuliaTakesAQuijiboMapAsKindRational) {
+  ASSERT_EQ(RunQuijibo("map random --top 6 --bottom 4 --seed 3 --center-on sphere --target-resolution 12 -o " +
+                       Path("map.json")).code, 0);
+  Write("r.json", {{"kind", "rational"}, {"file", "map.json"}, {"detail", 0}});
+  const CommandResult r = RunQuijibo("julia " + Path("r.json") + " -o " + Path("r.png") + " --png-size 48");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["kind"], "rational");
+  EXPECT_EQ(j["result"]["iterations"], 4);  // the mesh stage's n and escape radius
+  EXPECT_EQ(j["result"]["escape_radius"], 2000.0);
+  EXPECT_EQ(j["result"]["inside"], "|q_n| < 1");
+  const int inside = j["result"]["inside_pixels"].get<int>();
+  EXPECT_GT(inside, 0);
+  EXPECT_LT(inside, 48 * 48);
+}
+
 }  // namespace
 }  // namespace quijibo
