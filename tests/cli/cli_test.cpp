@@ -270,5 +270,17 @@ TEST_F(MapKindsCli, JuliaTakesAQuijiboMapAsKindRational) {
   EXPECT_LT(inside, 48 * 48);
 }
 
+// The gallery's experiments (docs/gallery.md) stay valid: each one checks as shipped.
+TEST(GalleryExperiments, EachChecks) {
+  int checked = 0;
+  for (const auto& e : std::filesystem::directory_iterator(std::string(QUIJIBO_SOURCE_DIR) + "/experiments/gallery")) {
+    if (e.path().extension() != ".json") continue;
+    const CommandResult r = RunQuijibo("run --check " + e.path().string());
+    EXPECT_EQ(r.code, 0) << e.path() << "\n" << r.out;
+    ++checked;
+  }
+  EXPECT_GE(checked, 5);
+}
+
 }  // namespace
 }  // namespace quijibo
