@@ -1,4 +1,5 @@
 #include "mesh/fidelity.h"
+#include "quijibo/julia_setup.h"
 
 #include <algorithm>
 #include <cmath>
@@ -136,7 +137,10 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
     return true;
   };
   std::unique_ptr<JuliaMap<double>> julia;
-  const RationalMap iterated = IterationMap(map, o.reference_frame, o.detail);
+  JuliaSetupOptions setup;
+  setup.reference_frame = o.reference_frame;
+  setup.detail = o.detail;
+  const RationalMap iterated = o.iterated ? *o.iterated : MakeJuliaSetup(map, setup).map;
   if (o.julia.iterations > 0) julia = std::make_unique<JuliaMap<double>>(iterated, o.julia);
   const std::int64_t count = std::int64_t(n) * n * n;
   std::vector<char> in_set(julia ? static_cast<std::size_t>(count) : 0), in_target(static_cast<std::size_t>(count));

@@ -28,6 +28,7 @@
 // target's bounding-box diagonal.
 #pragma once
 
+#include <memory>
 #include <cstdint>
 #include <string>
 
@@ -44,6 +45,9 @@ struct FidelityOptions {
   JuliaOptions julia;           // the n-step field (iterations 0: skip it)
   bool reference_frame = false;  // the n-step set iterated in the reference frame (ReferenceFrame)
   double detail = kSmoothDetail;  // ... of the map with this detail (WithDetail)
+  // The map as iterated when the caller made it already (MakeJuliaSetup, quijibo/julia_setup.h):
+  // then reference_frame and detail are its, not read here.
+  std::shared_ptr<const RationalMap> iterated;
   int closing = 2;              // closed IoU: half side of the closing's cube, lattice cells, in [0, 16]
   double iso = 0.0;
   int surface_samples = 20000;  // points per mesh for Chamfer and Hausdorff

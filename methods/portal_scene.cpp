@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 
+#include "methods/map_kind.h"
 #include "methods/modulus_target.h"
 #include "util/error.h"
 #include "util/io.h"
@@ -33,7 +34,20 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
   const MaskGridLoader load_mask = MakeMaskGridLoader(sdf_resolution);
   std::shared_ptr<const QuaternionMap> base;
   std::function<double(const Quat&)> base_set;
-  if (r.has("/map")) {
+  int default_iterations = 20;
+  double default_escape = 20.0;
+  if (r.has("/map") && r.at("/map").is_object()) {
+    if (r.has("/target")) r.fail("/map", "give either \"map\" or \"target\", not both");
+    const KindMap km = ReadKindMap(r, "/map", dir);
+    base = km.map;
+    base_set = km.base_set;
+    for (int a = 0; a < 3; ++a)
+      s.target.box_min[a] = km.center[a] - km.half_extent, s.target.box_max[a] = km.center[a] + km.half_extent;
+    s.target.dimension = int(r.number_or("/dimension", 3));
+    default_iterations = km.kind->iteration.iterations;
+    default_escape = km.kind->iteration.escape_radius;
+    s.bounded = km.kind->iteration.bounded;
+  } else if (r.has("/map")) {
     if (r.has("/target")) r.fail("/map", "give either \"map\" (a QUIJIBO map) or \"target\", not both");
     auto rm = std::make_shared<RationalQuaternionMap>(ReadMap(rel(r.string("/map"))));
     base = rm;
@@ -103,8 +117,8 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
   for (std::size_t i = 0; i < n; ++i)
     portals.push_back(PortalFromJson(r, "/portals/" + std::to_string(i), dir, load_mask));
   s.map = std::make_shared<PortalMap>(base, std::move(portals), base_set);
-  s.iterations = int(r.number_or("/iterations", 20));
-  s.escape = r.number_or("/escape_radius", 20.0);
+  s.iterations = int(r.number_or("/iterations", default_iterations));
+  s.escape = r.number_or("/escape_radius", default_escape);
   if (r.has("/box")) {
     const std::size_t k = r.array_size("/box");
     if (k != 4 && k != 6) r.fail("/box", "expected 4 (2D) or 6 (3D) numbers");

@@ -1,5 +1,6 @@
 // Portal scenes (Schor and Kim 2024; docs/modulus-portals.md): a spec document ("quijibo-portals"
-// version 1) read into a base map (a shape modulus or a QUIJIBO map) with its portals, and the
+// version 1) read into a base map (a shape modulus, a QUIJIBO map file, or a map object of any kind,
+// methods/map_kind.h, whose iteration defaults and region it takes) with its portals, and the
 // Koch snowflake preset.
 #pragma once
 
@@ -22,6 +23,7 @@ struct PortalScene {
   // The spec's output defaults: iterations, escape radius, box (4 or 6 numbers; empty: none).
   int iterations = 20;
   double escape = 20.0;
+  bool bounded = false;  // the inside convention of the base map's kind (IterationOptions::bounded)
   std::vector<double> box;
 };
 

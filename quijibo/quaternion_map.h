@@ -34,12 +34,17 @@ class QuaternionMap {
 struct IterationOptions {
   int iterations = 3;
   double escape_radius = 20.0;
+  // Which set is the inside: false, |q_n| < 1 (the convention of QUIJIBO, the shape modulus and
+  // portals: the field log|q_n|); true, the orbit stays within the escape radius for n steps (the
+  // filled Julia set of a polynomial such as q^2 + c: the field log|q_m| - log(escape radius)).
+  bool bounded = false;
   std::string Validate() const;
 };
 
 inline constexpr double kFieldClamp = 700.0;
 
-// log|q_n| clamped to [-700, 700]; `used` (if given) receives n.
+// log|q_n| clamped to [-700, 700], minus log(escape radius) when `bounded`; `used` (if given)
+// receives n.
 inline double IterateField(const QuaternionMap& map, Quat q, const IterationOptions& o, int* used = nullptr) {
   const double escape2 = o.escape_radius * o.escape_radius;
   int n = 0;
@@ -53,7 +58,8 @@ inline double IterateField(const QuaternionMap& map, Quat q, const IterationOpti
   if (std::isnan(r2)) return kFieldClamp;
   if (r2 <= 0.0) return -kFieldClamp;
   const double v = 0.5 * std::log(r2);
-  return v < -kFieldClamp ? -kFieldClamp : (v > kFieldClamp ? kFieldClamp : v);
+  const double clamped = v < -kFieldClamp ? -kFieldClamp : (v > kFieldClamp ? kFieldClamp : v);
+  return o.bounded ? clamped - std::log(o.escape_radius) : clamped;
 }
 
 // A QUIJIBO rational map R(q) = e^C T(q) B(q)^-1 as a QuaternionMap: one application of

@@ -138,8 +138,10 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
     o.meshing.show_progress = true;
     if (!a->box.empty()) o.box = ParseBox(a->box);
     if (!a->files.vdb.empty() && o.vdb_grids.empty()) throw Error("--vdb-grids: name at least one grid");
-    a->j.finish(map, {0, 0, 0});  // the translation; MeshJulia places the rotation about the box's centre
-    o.julia.placement = SampleTransform{};
+    if (!a->j.rotate.empty()) {  // MeshJulia's setup resolves the translation and places the rotation
+      o.rotation = ParseNumbers(a->j.rotate, "--rotate");
+      if (o.rotation.size() != 4) throw Error("--rotate: expected ax,ay,az,degrees");
+    }
     const pipeline::MeshStageResult r = pipeline::MeshJulia(map, o, mesher);
     if (!r.writer) return;
     if (r.empty() && !a->allow_empty)

@@ -10,6 +10,7 @@
 #include "experiments/cli/bind.h"
 #include "experiments/cli/cli.h"
 #include "experiments/pipeline/compare.h"
+#include "experiments/pipeline/julia_set.h"
 #include "experiments/pipeline/modulus.h"
 #include "experiments/pipeline/portal.h"
 #include "experiments/pipeline/product.h"
@@ -83,6 +84,24 @@ void AddPortalCommand(CLI::App& app) {
     a->o.spec_file = a->spec;
     const pipeline::PortalStageResult r = pipeline::Portal(a->o, a->out);
     pipeline::WritePortal(r, a->out, a->write_spec, a->write_poly);
+    std::printf("%s\n", r.report.dump(1).c_str());
+  });
+}
+
+void AddJuliaCommand(CLI::App& app) {
+  struct Args {
+    std::string out;
+    pipeline::JuliaSetStageOptions o;
+  };
+  auto a = std::make_shared<Args>();
+  CLI::App* c = app.add_subcommand(
+      "julia", "The Julia set of a map of any kind (q^d + c, a QUIJIBO map, ...; docs/map-kinds.md): 2D PNG or 3D PLY");
+  c->add_option("map", a->o.map_file, "Map JSON: {\"kind\": ..., ...} (docs/map-kinds.md)")->required();
+  AddOutputOptions(c, a->out, a->o.output);
+  c->callback([a] {
+    a->o.output.format = HasExtension(a->out, ".ply") ? "ply" : "png";
+    const pipeline::JuliaSetStageResult r = pipeline::JuliaSet(a->o);
+    pipeline::WriteProduct(r.product, a->out);
     std::printf("%s\n", r.report.dump(1).c_str());
   });
 }
@@ -211,6 +230,7 @@ void AddBenchModulusCommand(CLI::App* bench) {
 void AddModulusCommands(CLI::App& app, CLI::App& bench) {
   AddModulusCommand(app);
   AddPortalCommand(app);
+  AddJuliaCommand(app);
   AddCompareCommand(app);
   AddBenchModulusCommand(&bench);
 }

@@ -55,7 +55,9 @@ json Measure(const FidelityArgs& a) {
   pipeline::MeshStageOptions iteration = a.iteration;
   iteration.julia = o.julia;
   iteration.julia.capture_radius = a.iteration.julia.capture_radius;
-  o.julia = iteration.TranslatedJulia(map);
+  const auto setup = std::make_shared<JuliaSetup>(MakeJuliaSetup(map, iteration.Setup()));
+  o.julia = setup->julia;
+  o.iterated = std::shared_ptr<const RationalMap>(setup, &setup->map);
   mesh::Fidelity f = mesh::MeasureSets(map, target, o);
   if (!a.julia_mesh.empty() || !a.shape_mesh.empty()) {
     if (a.julia_mesh.empty() || a.shape_mesh.empty())

@@ -5,6 +5,7 @@
 #include "experiments/pipeline/triptych.h"
 #include "util/error.h"
 #include "util/io.h"
+#include "methods/map_kind.h"
 
 namespace quijibo::pipeline {
 
@@ -15,7 +16,7 @@ namespace {
 
 const std::vector<std::string> kTopKeys = {"name",      "description", "method",   "seed",    "target",  "initial",
                                            "optimizer", "mesh",        "pictures", "outputs", "modulus", "portal",
-                                           "intricate"};
+                                           "intricate", "julia"};
 
 struct Top {
   std::string name, description, method = "quijibo";
@@ -28,7 +29,7 @@ struct Top {
             .String("description", "", "Shown at the top of the report",
                     [](auto& o) -> std::string& { return o.description; })
             .Choice("method", "", "Which pipeline", [](auto& o) -> std::string& { return o.method; },
-                    {"quijibo", "modulus", "portal"})
+                    {"quijibo", "modulus", "portal", "julia"})
             .Integer(
                 "seed", "", "The default of every seed", [](auto& o) -> std::uint64_t& { return o.seed; }, 0, kMaxSeed);
     return s;
@@ -86,6 +87,8 @@ json DescribeSettings() {
           {"modulus/output", ProductOutputOptions::Settings().Describe(modulus.output)},
           {"portal", PortalStageOptions::Settings().Describe()},
           {"portal/output", ProductOutputOptions::Settings().Describe(portal.output)},
+          {"julia/output", ProductOutputOptions::Settings().Describe(JuliaSetStageOptions().output)},
+          {"julia/map", DescribeMapKinds()},
           {"pictures", PicturesOptions::Settings().Describe()},
           {"outputs", OutputsOptions::Settings().Describe()},
           {"energy", EnergyStageOptions::Settings().Describe()}};
@@ -123,8 +126,10 @@ Experiment Experiment::FromJson(const json& doc, const std::string& source, cons
   only_for("intricate", {"quijibo"});
   only_for("modulus", {"modulus"});
   only_for("portal", {"portal"});
+  only_for("julia", {"julia"});
+  if (method == "julia" && r.has("/target")) r.fail("/target", "not used by \"method\": \"julia\" (the map kind has its region)");
 
-  if (method != "portal" || r.has("/target")) {
+  if ((method != "portal" || r.has("/target")) && method != "julia") {
     TargetOptions start;
     if (method != "quijibo") start.origin.reset();  // the unit frame has no fractal origin
     e.target = TargetOptions::FromJson(r, "/target", base, start);
@@ -166,6 +171,7 @@ Experiment Experiment::FromJson(const json& doc, const std::string& source, cons
     e.modulus = ModulusStageOptions::FromJson(r, "/modulus", base, start);
   }
   if (method == "portal") e.portal = PortalStageOptions::FromJson(r, "/portal", base);
+  if (method == "julia") e.julia = JuliaSetStageOptions::FromJson(r, "/julia", base);
   e.pictures = PicturesOptions::FromJson(r, "/pictures", base);
   OutputsOptions::Settings().Read(r, "/outputs", base, e.outputs);
   return e;
@@ -189,6 +195,7 @@ json Experiment::ToJson() const {
   }
   if (method == "modulus") out["modulus"] = modulus.ToJson();
   if (method == "portal") out["portal"] = portal.ToJson();
+  if (method == "julia") out["julia"] = julia.ToJson();
   out["pictures"] = pictures.ToJson();
   json outputs_json;
   OutputsOptions::Settings().Write(outputs, outputs_json);

@@ -11,6 +11,7 @@
 
 #include "experiments/pipeline/energy.h"
 #include "experiments/pipeline/initial.h"
+#include "experiments/pipeline/julia_set.h"
 #include "experiments/pipeline/mesh.h"
 #include "experiments/pipeline/modulus.h"
 #include "experiments/pipeline/optimize.h"
@@ -31,10 +32,10 @@ struct Experiment {
   std::string path;  // the experiment file, absolute ("" when built in memory)
   std::string name;  // default: the file's name without .json
   std::string description;
-  std::string method = "quijibo";  // "quijibo", "modulus" or "portal"
+  std::string method = "quijibo";  // "quijibo", "modulus", "portal" or "julia"
   // The default of every seed (monopole order and sampling, random map, generated versor).
   std::uint64_t seed = kDefaultSeed;
-  std::optional<TargetOptions> target;  // required but for portal
+  std::optional<TargetOptions> target;  // required but for portal and julia
   // quijibo
   InitialGuessStageOptions initial;
   std::vector<OptimizeStageOptions> optimizers;  // at least one, unique names
@@ -45,6 +46,7 @@ struct Experiment {
   // modulus, portal
   ModulusStageOptions modulus;
   PortalStageOptions portal;
+  JuliaSetStageOptions julia;  // julia: a map of any kind (methods/map_kind.h)
   PicturesOptions pictures;
   OutputsOptions outputs;
 

@@ -10,6 +10,7 @@
 #include "experiments/pipeline/quality.h"
 #include "experiments/pipeline/stage_cache.h"
 #include "experiments/pipeline/triptych.h"
+#include "quijibo/julia_setup.h"
 #include "util/child_process.h"
 #include "util/error.h"
 #include "util/hash.h"
@@ -231,7 +232,9 @@ FilmSummary MakeFilm(const FilmOptions& o, const std::string& out, bool quiet) {
 
   // What the frames share: the iterated map and the framing.
   const bool fixed_map = o.vary == "translate_potential" || o.vary == "translation" || o.vary == "iterations";
-  const RationalMap iterated = IterationMap(input, o.mesh.iteration_frame == "reference", o.mesh.detail);
+  JuliaSetupOptions frame_only = o.mesh.Setup();
+  frame_only.translate.reset(), frame_only.translate_potential.reset();
+  const RationalMap iterated = MakeJuliaSetup(input, frame_only).map;
   Vec3 direction{0.0, 0.0, 1.0};
   if (o.mesh.translate) direction = {(*o.mesh.translate)[0], (*o.mesh.translate)[1], (*o.mesh.translate)[2]};
   const double dn = std::hypot(direction[0], direction[1], direction[2]);

@@ -118,35 +118,36 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
   return s;
 }
 
+JuliaSetupOptions MeshStageOptions::Setup() const {
+  JuliaSetupOptions s;
+  s.julia = julia;
+  s.reference_frame = iteration_frame == "reference";
+  s.detail = detail;
+  s.translate = translate;
+  s.translate_potential = translate_potential;
+  s.box = box;
+  s.rotation = rotation;
+  return s;
+}
+
 JuliaOptions MeshStageOptions::TranslatedJulia(const RationalMap& input_map) const {
   if (!translate_potential) return TranslatedJuliaOfIterated(input_map);  // the map is not looked at
-  return TranslatedJuliaOfIterated(IterationMap(input_map, iteration_frame == "reference", detail));
+  return TranslatedJuliaOfIterated(MakeJuliaSetup(input_map, Setup()).map);
 }
 
 JuliaOptions MeshStageOptions::TranslatedJuliaOfIterated(const RationalMap& iterated) const {
   JuliaOptions j = julia;
-  if (translate_potential) {
-    const Vec3 direction = translate ? Vec3{(*translate)[0], (*translate)[1], (*translate)[2]} : Vec3{0.0, 0.0, 1.0};
-    j.root_translation = TranslationForPotential(iterated, direction, *translate_potential);
-  } else if (translate) {
-    for (std::size_t a = 0; a < translate->size(); ++a) j.root_translation[a] = (*translate)[a];
-  }
+  j.root_translation = ResolveRootTranslation(iterated, Setup());
   return j;
 }
 
 std::string MeshStageOptions::Validate() const {
   if (std::string why = Settings().Check(*this); !why.empty()) return why;
-  if (!box.empty() && box.size() != 6) return "box: expected xmin,ymin,zmin,xmax,ymax,zmax";
-  for (std::size_t a = 0; a < 3 && box.size() == 6; ++a)
-    if (!(box[3 + a] > box[a])) return "box: max must exceed min on every axis";
   for (const auto& g : vdb_grids)
     if (g != "surface" && g != "density" && g != "field")
       return "vdb grids: expected surface, density or field, found " + g;
   if (!(vdb_band >= 1 && vdb_band <= 1000)) return "vdb band: expected a number in [1, 1000]";
-  if (!rotation.empty() && rotation.size() != 4) return "rotation: expected ax,ay,az,degrees";
-  if (translate_potential && translate && translate->size() == 4 && (*translate)[3] != 0.0)
-    return "translate: with translate_potential it gives a direction in space (x, y, z), found a k component";
-  return julia.Validate();
+  return Setup().Validate();
 }
 
 MeshStageOptions MeshStageOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
@@ -170,26 +171,21 @@ bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& o, m
 
 MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& o, const Mesher& mesher) {
   if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
+  return MeshJulia(MakeJuliaSetup(input_map, o.Setup()), o, mesher);
+}
+
+MeshStageResult MeshJulia(const JuliaSetup& setup, const MeshStageOptions& o, const Mesher& mesher) {
+  if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
   MeshStageResult r;
-  const RationalMap map = IterationMap(input_map, o.iteration_frame == "reference", o.detail, &r.lambda);
+  const RationalMap& map = setup.map;
+  r.lambda = setup.lambda;
   r.frame = map.frame;
   r.meshing = o.meshing;
   mesh::MeshingOptions& m = r.meshing;
-  const double half = map.frame.fractal_radius / 2;
-  const Vec3 c = map.frame.box_center();
-  m.min_corner = {c[0] - half, c[1] - half, c[2] - half};
-  m.max_corner = {c[0] + half, c[1] + half, c[2] + half};
-  if (o.box.size() == 6)
-    for (int a = 0; a < 3; ++a) m.min_corner[a] = o.box[a], m.max_corner[a] = o.box[3 + a];
+  m.min_corner = setup.box_min;
+  m.max_corner = setup.box_max;
   if (auto why = m.Validate(); !why.empty()) throw Error("mesh: " + why);
-  r.julia = o.TranslatedJuliaOfIterated(map);  // `map` is already the iterated one
-  if (o.rotation.size() == 4) {
-    const Vec3 center{(m.min_corner[0] + m.max_corner[0]) / 2, (m.min_corner[1] + m.max_corner[1]) / 2,
-                      (m.min_corner[2] + m.max_corner[2]) / 2};
-    r.julia.placement =
-        SampleTransform::AxisAngle({o.rotation[0], o.rotation[1], o.rotation[2]}, o.rotation[3], center);
-  }
-  if (auto why = r.julia.Validate(); !why.empty()) throw Error(why);
+  r.julia = setup.julia;
   mesh::JuliaFieldStats stats;
   const mesh::BatchField field = mesh::MakeJuliaField(map, r.julia, o.iso, ParsePrecision(o.precision), &stats,
                                                        ParseJuliaKernel(o.kernel));

@@ -13,6 +13,7 @@
 #include "mesh/marching_cubes.h"
 #include "mesh/triangle_mesh.h"
 #include "quijibo/julia.h"
+#include "quijibo/julia_setup.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo::pipeline {
@@ -37,6 +38,9 @@ struct MeshStageOptions {
   // The root translation by its effect (TranslationForPotential, rational_map.h): along
   // `translate`'s direction (default z), the length at which the iterated map's L is this at -t.
   std::optional<double> translate_potential;
+  // How the map is iterated (the one conversion of these settings; MakeJuliaSetup makes the
+  // iterated map from it): `julia`, iteration_frame, detail, translate(_potential), box, rotation.
+  JuliaSetupOptions Setup() const;
   // `julia` with its root translation: from `translate_potential` (on `input_map` as iterated: its
   // `iteration_frame` and `detail`), else `translate` when set.
   JuliaOptions TranslatedJulia(const RationalMap& input_map) const;
@@ -96,6 +100,8 @@ struct MeshStageResult {
 
 // Meshes `map`'s Julia set. Throws quijibo::Error on invalid options.
 MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& options, const Mesher& mesher = LocalMesher);
+// The same on the iterated map made already (MakeJuliaSetup(map, options.Setup())).
+MeshStageResult MeshJulia(const JuliaSetup& setup, const MeshStageOptions& options, const Mesher& mesher = LocalMesher);
 
 // Where the files go: `out` (.ply or .obj), and when not empty an extra OBJ and a .vdb.
 struct MeshFiles {

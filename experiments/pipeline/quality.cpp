@@ -26,12 +26,14 @@ json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const
   o.iso = iso;
   o.detail = options.detail;
   o.reference_frame = options.reference_frame;
+  o.iterated = options.iterated;
   const mesh::Fidelity f = mesh::MeasureSets(chosen, target, o);
   json j = f.ToJson();
   // The start's one-step set at the same jittered points: whether the optimization moved the
   // set's volume towards the target's, free of the lattice's aliasing (docs/fidelity.md §10).
   mesh::FidelityOptions one = o;
   one.julia.iterations = 0;
+  one.iterated.reset();  // `initial`'s, not made: the one-step set only
   j["one_step"]["start_volume_iou"] = mesh::MeasureSets(initial, target, one).one_step.volume_iou;
   j["lattice"] = o.lattice;
   j["iterations"] = julia.iterations;

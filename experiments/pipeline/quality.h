@@ -5,6 +5,7 @@
 // thresholds and why: docs/experiments.md, "Quality of the result".
 #pragma once
 
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -35,6 +36,7 @@ struct QualityOptions {
   // The n-step set as the mesh stage iterates it (its `detail` and `iteration_frame`).
   double detail = kSmoothDetail;
   bool reference_frame = false;
+  std::shared_ptr<const RationalMap> iterated;  // `chosen` as iterated, when made already (MakeJuliaSetup)
 };
 
 // The measuring of `quijibo run`'s fidelity stage (fidelity/fidelity.json): the fidelity figures of

@@ -148,7 +148,7 @@ void MeshSection(Page& page) {
 // The shape modulus's and the portals' outputs, and the slice and render pictures.
 void ProductsAndPictures(Page& page, const Experiment& e) {
   std::ostringstream& md = page.md;
-  for (const char* prod : {"modulus", "portal"}) {
+  for (const char* prod : {"modulus", "portal", "julia"}) {
     const std::string dir = prod;
     for (const char* ext : {"ply", "png"})
       if (page.Exists(dir + "/julia." + ext)) {

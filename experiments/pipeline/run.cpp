@@ -39,6 +39,7 @@ void ReferencedFiles(const json& j, const fs::path& dir, std::vector<std::string
     if (j.value("type", "") == "sdf" && j.contains("file") && j["file"].is_string())
       out.push_back(ResolvePath(dir, j["file"]));
     if (j.contains("polynomial") && j["polynomial"].is_string()) out.push_back(ResolvePath(dir, j["polynomial"]));
+    if (j.contains("kind") && j.contains("file") && j["file"].is_string()) out.push_back(ResolvePath(dir, j["file"]));
     for (const char* k : {"target", "map"}) {
       std::error_code ec;
       if (j.contains(k) && j[k].is_string() && fs::is_regular_file(ResolvePath(dir, j[k]), ec))
@@ -91,6 +92,7 @@ class Runner {
   void Quijibo();
   void Modulus();
   void Portal();
+  void JuliaSet();
   const std::vector<StageRecord>& records() const { return cache_.records(); }
   double Seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
   const std::string& resume_command() const { return resume_; }
@@ -432,10 +434,12 @@ void Runner::FidelityStage(const std::string& initial_hash, const std::string& c
   set.iterations = e_.mesh.julia.iterations;
   set.escape_radius = e_.mesh.julia.escape_radius;
   set.slice = e_.mesh.julia.slice;
-  set.root_translation = e_.mesh.TranslatedJulia(ReadMap(map_path)).root_translation;
+  auto setup = std::make_shared<JuliaSetup>(MakeJuliaSetup(ReadMap(map_path), e_.mesh.Setup()));
+  set.root_translation = setup->julia.root_translation;
   QualityOptions qo;
   qo.detail = e_.mesh.detail;
   qo.reference_frame = e_.mesh.iteration_frame == "reference";
+  qo.iterated = std::shared_ptr<const RationalMap>(setup, &setup->map);
   cache_.Run("fidelity", "fidelity",
              {{"julia", JuliaJson(set, e_.mesh.iso, "double")}, {"alpha", alpha},
               {"lattice", qo.lattice}, {"detail", qo.detail}, {"iteration_frame", e_.mesh.iteration_frame}},
@@ -541,6 +545,27 @@ void Runner::Portal() {
   if (render) RenderStage("portal/julia.ply", hash);
 }
 
+void Runner::JuliaSet() {
+  const JuliaSetStageOptions& j = e_.julia;
+  const bool render = e_.pictures.enabled && j.output.format == "ply";
+  total_ = 1 + (render ? 1 : 0);
+  downstream_["julia"] = {"pictures"};
+  std::vector<std::string> files;
+  if (!j.map_file.empty()) {
+    files.push_back(j.map_file);
+    ReferencedFiles(ParseJson(ReadFile(j.map_file), j.map_file), fs::path(j.map_file).parent_path(), files);
+  } else {
+    ReferencedFiles(j.map_inline, fs::path(e_.path).parent_path(), files);
+  }
+  const std::string out = "julia." + j.output.format;
+  const std::string hash = cache_.Run("julia", "julia", j.ToJson(), files, {}, [&](const std::string& dir) {
+    const JuliaSetStageResult r = pipeline::JuliaSet(j);
+    WriteProduct(r.product, dir + "/" + out);
+    WriteFileAtomically(dir + "/julia.json", r.report.dump(1) + "\n");
+  });
+  if (render) RenderStage("julia/julia.ply", hash);
+}
+
 // The results folder, created if need be; throws when it cannot be written. `created` tells
 // whether this run made it.
 std::string PrepareResults(const std::string& out, bool* created) {
@@ -582,8 +607,10 @@ RunSummary RunExperiment(const Experiment& e, const RunOptions& o) {
         runner.Quijibo();
       else if (e.method == "modulus")
         runner.Modulus();
-      else
+      else if (e.method == "portal")
         runner.Portal();
+      else
+        runner.JuliaSet();
     } catch (const Interrupted& x) {
       const std::string stage = runner.Failed(x.what());
       throw Interrupted("interrupted (" + SignalName(x.signal) + ") in stage " + stage +

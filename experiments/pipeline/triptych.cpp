@@ -8,6 +8,7 @@
 #include "experiments/pipeline/quality.h"
 #include "experiments/pipeline/stage_cache.h"
 #include "mesh/fidelity.h"
+#include "quijibo/julia_setup.h"
 #include "util/error.h"
 
 namespace quijibo::pipeline {
@@ -37,10 +38,12 @@ json SetFidelity(const RationalMap& map, const ScalarGrid& target, const MeshSta
   f.julia.escape_radius = o.julia.escape_radius;
   f.julia.capture_radius = o.julia.capture_radius;
   f.julia.slice = o.julia.slice;
-  f.julia.root_translation = o.TranslatedJulia(map).root_translation;
+  auto setup = std::make_shared<JuliaSetup>(MakeJuliaSetup(map, o.Setup()));
+  f.julia.root_translation = setup->julia.root_translation;
   f.iso = o.iso;
   f.detail = o.detail;
   f.reference_frame = o.iteration_frame == "reference";
+  f.iterated = std::shared_ptr<const RationalMap>(setup, &setup->map);
   json fid = mesh::MeasureSets(map, target, f).ToJson();
   fid["lattice"] = lattice;
   fid["closing"] = f.closing;

@@ -187,5 +187,100 @@ TEST_F(CliTest, EveryCommandWithAMapAndATargetRefusesAFrameMismatch) {
   EXPECT_NE(r.out.find("(" + Path("t.frame.json") + ") is not the map's"), std::string::npos) << r.out;
 }
 
+// `quijibo julia`, the experiment method "julia" and portal scenes over a map object: the engine
+// takes any map kind (methods/map_kind.h) from the command line and from experiments.
+class MapKindsCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("quijibo_map_kinds_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  void Write(const std::string& name, const nlohmann::json& j) const { std::ofstream(Path(name)) << j.dump(1); }
+  std::filesystem::path dir_;
+};
+
+TEST_F(MapKindsCli, JuliaDrawsAndMeshesAPolynomial) {
+  Write("basilica.json", {{"kind", "polynomial"}, {"c", {-1.0, 0.0}}});
+  const CommandResult png = RunQuijibo("julia " + Path("basilica.json") + " -o " + Path("b.png") + " --png-size 64");
+  ASSERT_EQ(png.code, 0) << png.out;
+  const nlohmann::json r = nlohmann::json::parse(png.out);
+  EXPECT_EQ(r["kind"], "polynomial");
+  EXPECT_EQ(r["result"]["iterations"], 20);  // the kind's default
+  EXPECT_GT(r["result"]["inside_pixels"].get<int>(), 64 * 64 / 8);
+  EXPECT_TRUE(std::filesystem::exists(Path("b.png")));
+  Write("ball.json", {{"kind", "polynomial"}, {"c", {0.0, 0.0, 0.0, 0.0}}});
+  const CommandResult ply = RunQuijibo("julia " + Path("ball.json") + " -o " + Path("b.ply") + " -r 24");
+  ASSERT_EQ(ply.code, 0) << ply.out;
+  EXPECT_GT(nlohmann::json::parse(ply.out)["result"]["triangles"].get<int>(), 100);
+}
+
+TEST_F(MapKindsCli, BadKindsAreRefusedWithThePointer) {
+  Write("bad.json", {{"kind", "polynomial"}, {"c", {1.0}}});
+  const CommandResult r = RunQuijibo("julia " + Path("bad.json") + " -o " + Path("b.png"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("/c: expected 2 (complex) or 4"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(Path("b.png")));
+  Write("e.json", {{"method", "julia"}, {"julia", {{"map", {{"kind", "cubic"}}}}}});
+  const CommandResult e = RunQuijibo("run --check " + Path("e.json"));
+  EXPECT_EQ(e.code, 1);
+  EXPECT_NE(e.out.find("/julia/map/kind"), std::string::npos) << e.out;
+}
+
+TEST_F(MapKindsCli, ExperimentAndPortalSceneTakeAMapObject) {
+  Write("j.json", {{"method", "julia"},
+                   {"julia", {{"map", {{"kind", "polynomial"}, {"c", {-1.0, 0.0}}}}, {"output", {{"png_size", 32}}}}}});
+  const CommandResult j = RunQuijibo("run " + Path("j.json") + " --quiet --out " + Path("j"));
+  ASSERT_EQ(j.code, 0) << j.out;
+  EXPECT_TRUE(std::filesystem::exists(Path("j/julia/julia.png")));
+  Write("p.json", {{"method", "portal"},
+                   {"portal",
+                    {{"spec",
+                      {{"format", "quijibo-portals"},
+                       {"version", 1},
+                       {"map", {{"kind", "polynomial"}, {"c", {-1.0, 0.0}}}},
+                       {"dimension", 2},
+                       {"portals", {{{"mask", {{"type", "sphere"}, {"center", {1.8, 0.0, 0.0}}, {"radius", 0.1}}},
+                                     {"transform", {{"scale", 15}}}}}}}},
+                     {"output", {{"png_size", 32}}}}}});
+  const CommandResult p = RunQuijibo("run " + Path("p.json") + " --quiet --out " + Path("p"));
+  ASSERT_EQ(p.code, 0) << p.out;
+  const nlohmann::json report = nlohmann::json::parse(std::ifstream(Path("p/portal/portal.json")));
+  // The kind's defaults: n 20 (as a spec's own default) and escape radius 4 (a spec's is 20).
+  EXPECT_EQ(report["result"]["iterations"], 20);
+  EXPECT_EQ(report["result"]["escape_radius"], 4.0);
+}
+
+TEST_F(MapKindsCli, JuliaTakesAQuijiboMapAsKindRational) {
+  ASSERT_EQ(RunQuijibo("map random --top 6 --bottom 4 --seed 3 --center-on sphere --target-resolution 12 -o " +
+                       Path("map.json")).code, 0);
+  Write("r.json", {{"kind", "rational"}, {"file", "map.json"}, {"detail", 0}});
+  const CommandResult r = RunQuijibo("julia " + Path("r.json") + " -o " + Path("r.png") + " --png-size 48");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["kind"], "rational");
+  EXPECT_EQ(j["result"]["iterations"], 4);  // the mesh stage's n and escape radius
+  EXPECT_EQ(j["result"]["escape_radius"], 2000.0);
+  EXPECT_EQ(j["result"]["inside"], "|q_n| < 1");
+  const int inside = j["result"]["inside_pixels"].get<int>();
+  EXPECT_GT(inside, 0);
+  EXPECT_LT(inside, 48 * 48);
+}
+
+// The gallery's experiments (docs/gallery.md) stay valid: each one checks as shipped.
+TEST(GalleryExperiments, EachChecks) {
+  int checked = 0;
+  for (const auto& e : std::filesystem::directory_iterator(std::string(QUIJIBO_SOURCE_DIR) + "/experiments/gallery")) {
+    if (e.path().extension() != ".json") continue;
+    const CommandResult r = RunQuijibo("run --check " + e.path().string());
+    EXPECT_EQ(r.code, 0) << e.path() << "\n" << r.out;
+    ++checked;
+  }
+  EXPECT_GE(checked, 5);
+}
+
 }  // namespace
 }  // namespace quijibo
