@@ -32,6 +32,6 @@ if [[ "${1:-}" == "--sanitize" ]]; then
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DQUIJIBO_E2E_TESTS=OFF -DQUIJIBO_WITH_MPI=OFF \
     -DQUIJIBO_PYTHON=OFF
   export ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1
-  phase "sanitizer tests" ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE e2e \
+  phase "sanitizer tests" ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE 'e2e|browser' \
     -E 'KillResume|PrecisionsThroughOptimize|RunTest\.KilledAndResumed|KernelFit\.ThinParts|SdfShippedMeshes\.BunnyAndTooth|ModulusCli\.BunnyModulusMesh'
 fi

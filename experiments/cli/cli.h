@@ -29,6 +29,7 @@ void AddShapeCommands(CLI::App& app, CLI::App& bench);    // fidelity; bench sha
 void AddBenchPrecisionCommands(CLI::App& bench);          // bench precision (bench_precision.cpp)
 void AddBenchBandCommand(CLI::App& bench);                // bench band
 void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/cli/run.cpp)
+void AddReportHtmlCommand(CLI::App& app);  // report-html: a results folder's report.html (run.cpp)
 // Every subcommand above, in this order, and `settings` (experiments/cli/commands.cpp).
 void AddCommands(CLI::App& app);
 

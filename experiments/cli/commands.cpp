@@ -34,6 +34,7 @@ void AddCommands(CLI::App& app) {
   AddShapeCommands(app, *bench);
   AddBenchBandCommand(*bench);
   AddRunCommand(app);
+  AddReportHtmlCommand(app);
   AddSettingsCommand(app);
 }
 
