@@ -34,7 +34,8 @@ def ParseArguments():
                    help="the file's up axis (default y, as the shipped bunny and most scanned meshes)")
     p.add_argument("--view", type=float, nargs=2, default=[35.0, 20.0], metavar=("AZIMUTH", "ELEVATION"),
                    help="camera azimuth and elevation in degrees (default 35 20: a three-quarter view)")
-    p.add_argument("--vdb-grid", default="", help="the .vdb's grid (default: its first)")
+    p.add_argument("--vdb-grid", default="",
+                   help="the .vdb's level set grid (default: 'surface', quijibo's, else the file's first grid)")
     p.add_argument("--threads", type=int, default=0, help="render threads (default 0: all cores)")
     a = p.parse_args(argv)
     try:
@@ -124,22 +125,18 @@ def ImportMesh(path):
         if read is not None:
             return MeshObject("subject", *read)
         bpy.ops.import_mesh.ply(filepath=path)
-    elif ext == ".obj":
-        # Keep the file's axes: --up turns the object.
-        bpy.ops.import_scene.obj(filepath=path, axis_forward="-Z", axis_up="Y", split_mode="OFF")
+    elif ext == ".obj":  # the file's axes as they are (forward y, up z: no conversion); --up turns it
+        bpy.ops.wm.obj_import(filepath=path, forward_axis="Y", up_axis="Z")
     elif ext == ".stl":
-        bpy.ops.import_mesh.stl(filepath=path)
+        bpy.ops.import_mesh.stl(filepath=path, axis_forward="Y", axis_up="Z")
     else:
         Fail(f"{path}: expected .ply, .obj, .stl or .vdb")
     objects = [o for o in bpy.context.selected_objects if o.type == "MESH"]
     if not objects:
         Fail(f"{path}: no mesh in the file")
     o = objects[0]
-    if ext == ".obj":  # the importer turned Y-up into Z-up: undo it, --up decides
-        o.rotation_euler = (0, 0, 0)
-        bpy.context.view_layer.update()
-        o.data.transform(Matrix.Rotation(-math.pi / 2, 4, "X"))
-        o.matrix_world = Matrix.Identity(4)
+    o.data.transform(o.matrix_world)
+    o.matrix_world = Matrix.Identity(4)
     return o
 
 
@@ -161,7 +158,7 @@ def ImportVolume(path, grid):
     bpy.context.scene.collection.objects.link(o)
     mod = o.modifiers.new("level set", "VOLUME_TO_MESH")
     mod.object = vol
-    mod.grid_name = grid or names[0]
+    mod.grid_name = grid or ("surface" if "surface" in names else names[0])
     mod.resolution_mode = "GRID"
     mod.threshold = 0.0
     mod.use_smooth_shade = True
@@ -223,8 +220,8 @@ def Scene(a, o, extent):
     scene.render.threads_mode = "FIXED" if a.threads > 0 else "AUTO"
     if a.threads > 0:
         scene.render.threads = a.threads
-    scene.view_settings.view_transform = "Filmic"
-    scene.view_settings.look = "Medium High Contrast"
+    # Standard, not Filmic: the white behind the object stays white.
+    scene.view_settings.view_transform = "Standard"
     scene.render.image_settings.file_format = "PNG"
     scene.render.image_settings.color_mode = "RGB"
 
@@ -241,7 +238,7 @@ def Scene(a, o, extent):
     world.use_nodes = True
     bg = world.node_tree.nodes["Background"]
     bg.inputs["Color"].default_value = (0.78, 0.84, 0.95, 1.0)
-    bg.inputs["Strength"].default_value = 0.6
+    bg.inputs["Strength"].default_value = 0.35
 
     # Key: a large area light above, to the left and in front: soft shadows, as in the papers' figures.
     radius = float(np.linalg.norm(extent)) / 2
@@ -249,7 +246,7 @@ def Scene(a, o, extent):
     key = bpy.context.active_object
     key.data.shape = "DISK"
     key.data.size = 3.0 * radius
-    key.data.energy = 900.0 * radius * radius
+    key.data.energy = 250.0 * radius * radius
     key.rotation_euler = (Vector((0, 0, extent[2] / 2)) - key.location).to_track_quat("-Z", "Y").to_euler()
 
     # Camera: a three-quarter view framing the bounding sphere.
@@ -262,7 +259,7 @@ def Scene(a, o, extent):
     target = Vector((0, 0, extent[2] / 2))
     # cam_data.angle is the field of view across the longer side; frame across the shorter one.
     fov = 2 * math.atan(math.tan(cam_data.angle / 2) * min(a.width, a.height) / max(a.width, a.height))
-    distance = radius / math.sin(fov / 2) * 1.08
+    distance = radius / math.sin(fov / 2) * 0.92
     direction = Vector((math.sin(az) * math.cos(el), -math.cos(az) * math.cos(el), math.sin(el)))
     cam.location = target + direction * distance
     cam.rotation_euler = (target - cam.location).to_track_quat("-Z", "Y").to_euler()

@@ -2,8 +2,8 @@
 # README command 2: install what is missing, build, and run the whole test suite.
 #   --sanitize   also build with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ and
 #                run the suite there, but for the end-to-end tests (ctest label e2e: the shipped
-#                experiments at a small scale, thread-count determinism), which the release pass
-#                runs. The sanitizer tree is built without MPI (QUIJIBO_WITH_MPI=OFF), so CI also
+#                experiments at a small scale, thread-count determinism) and the browser test (label
+#                browser: report.html in headless chromium), which the release pass runs. The sanitizer tree is built without MPI (QUIJIBO_WITH_MPI=OFF), so CI also
 #                checks that build, and without the Python module (an ASan-instrumented extension
 #                only loads into an interpreter started with LD_PRELOAD=libasan; the release pass
 #                runs the Python tests). Its libraries are compiled at -O1 -g1 (ASan's advice; line

@@ -51,9 +51,9 @@ function Start() {
   const scene = new THREE.Scene();
   // Clay under a sky/ground hemisphere and two directional lights: the folds of a crust read as
   // light and shade from any side the user turns it to.
-  scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8478, 1.1));
-  const key = new THREE.DirectionalLight(0xffffff, 1.6);
-  const fill = new THREE.DirectionalLight(0xffffff, 0.5);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8478, 1.8));
+  const key = new THREE.DirectionalLight(0xffffff, 2.4);
+  const fill = new THREE.DirectionalLight(0xffffff, 0.8);
   const camera = new THREE.PerspectiveCamera(35, 1, 0.001, 1000);
   camera.add(key, fill);
   key.position.set(1, 1.5, 2);

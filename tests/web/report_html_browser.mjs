@@ -56,12 +56,12 @@ Check(!/(src|href)="(https?:)?\/\//.test(html), 'no reference to the network');
 const tooth = /tooth (\d+) of (\d+) triangles/.exec(out);
 Check(tooth && +tooth[1] <= 20000 && +tooth[2] > 20000, 'the tooth decimated to the budget (20000)');
 
-const profile = fs.mkdtempSync(path.join(work, 'profile-'));
+// playwright starts chromium with a new empty profile of its own (no --user-data-dir).
 const browser = await chromium.launch({
   executablePath: chromiumPath,
   headless: true,
   args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
-         '--disable-component-update', '--disable-sync', `--user-data-dir=${profile}`, '--use-angle=swiftshader',
+         '--disable-component-update', '--disable-sync', '--use-angle=swiftshader',
          '--enable-unsafe-swiftshader'],
 });
 try {
@@ -96,13 +96,19 @@ try {
       const g = c.getContext('2d');
       g.drawImage(img, 0, 0);
       const d = g.getImageData(0, 0, c.width, c.height).data;
-      const bg = [d[0], d[1], d[2]];  // a corner: the clear colour
-      const colours = new Set();
-      let off = 0;
+      // The background: the commonest colour (the viewer's clear colour).
+      const count = new Map();
       for (let i = 0; i < d.length; i += 4) {
-        colours.add((d[i] << 16) | (d[i + 1] << 8) | d[i + 2]);
-        if (Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) > 24) ++off;
+        const c = (d[i] << 16) | (d[i + 1] << 8) | d[i + 2];
+        count.set(c, (count.get(c) || 0) + 1);
       }
+      let bgc = 0, most = 0;
+      for (const [c, n] of count) if (n > most) { most = n; bgc = c; }
+      const bg = [bgc >> 16, (bgc >> 8) & 255, bgc & 255];
+      let off = 0;
+      for (let i = 0; i < d.length; i += 4)
+        if (Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) > 24) ++off;
+      const colours = count;
       return { width: c.width, height: c.height, colours: colours.size, off: off / (d.length / 4), sum: d.reduce((a, v, i) => (a * 31 + v * (i % 7 + 1)) % 1000000007, 7) };
     }, png.toString('base64'));
   }
