@@ -2,7 +2,7 @@
 # README command 2: install what is missing, build, and run the whole test suite.
 #   --sanitize   also build with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ and
 #                run the suite there, but for the end-to-end tests (ctest label e2e: the shipped
-#                experiments at a small scale, thread-count determinism) the browser test (label
+#                experiments at a small scale, thread-count determinism), the browser test (label
 #                browser: report.html in headless chromium) and the Blender script's (label blender,
 #                only where Blender is installed), which the release pass runs: none of them tests
 #                more under the sanitizers. The sanitizer tree is built without MPI (QUIJIBO_WITH_MPI=OFF), so CI also
