@@ -51,13 +51,16 @@ function Start() {
   const scene = new THREE.Scene();
   // Clay under a sky/ground hemisphere and two directional lights: the folds of a crust read as
   // light and shade from any side the user turns it to.
-  scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8478, 1.8));
-  const key = new THREE.DirectionalLight(0xffffff, 2.4);
-  const fill = new THREE.DirectionalLight(0xffffff, 0.8);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x5a554c, 0.7));
+  const key = new THREE.DirectionalLight(0xffffff, 3.2);
+  const fill = new THREE.DirectionalLight(0xffffff, 0.6);
   const camera = new THREE.PerspectiveCamera(35, 1, 0.001, 1000);
-  camera.add(key, fill);
-  key.position.set(1, 1.5, 2);
-  fill.position.set(-2, -0.5, 1);
+  // The lights turn with the camera: their targets too, so that their directions are the camera's.
+  camera.add(key, fill, key.target, fill.target);
+  key.target.position.set(0, 0, -1);
+  fill.target.position.set(0, 0, -1);
+  key.position.set(-1.5, 2, 1);
+  fill.position.set(2, -0.5, 1.5);
   scene.add(camera);
   const controls = new OrbitControls(camera, canvas);
   controls.enableDamping = false;
