@@ -11,6 +11,7 @@ OUT=results/bunny-demo
 echo
 echo "quijibo: done. Look at:"
 echo "  $OUT/report.md                  one page: roots, energies, per-pass table, times, the images"
+echo "  $OUT/report.html                the same page with a 3D viewer of the meshes (open it in a browser)"
 echo "  $OUT/initial/potential.png      the potential and the monopoles (top roots blue, bottom red)"
 echo "  $OUT/plot/convergence.png       the energy per step (psi+1)/2, like the paper's Fig. 11"
 echo "  $OUT/pictures/slice-n1.png      the one-step set against the bunny on z = 0 (orange: set only, blue: bunny only)"

@@ -2,8 +2,10 @@
 # README command 2: install what is missing, build, and run the whole test suite.
 #   --sanitize   also build with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ and
 #                run the suite there, but for the end-to-end tests (ctest label e2e: the shipped
-#                experiments at a small scale, thread-count determinism), which the release pass
-#                runs. The sanitizer tree is built without MPI (QUIJIBO_WITH_MPI=OFF), so CI also
+#                experiments at a small scale, thread-count determinism), the browser test (label
+#                browser: report.html in headless chromium) and the Blender script's (label blender,
+#                only where Blender is installed), which the release pass runs: none of them tests
+#                more under the sanitizers. The sanitizer tree is built without MPI (QUIJIBO_WITH_MPI=OFF), so CI also
 #                checks that build, and without the Python module (an ASan-instrumented extension
 #                only loads into an interpreter started with LD_PRELOAD=libasan; the release pass
 #                runs the Python tests). Its libraries are compiled at -O1 -g1 (ASan's advice; line
@@ -32,6 +34,6 @@ if [[ "${1:-}" == "--sanitize" ]]; then
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DQUIJIBO_E2E_TESTS=OFF -DQUIJIBO_WITH_MPI=OFF \
     -DQUIJIBO_PYTHON=OFF
   export ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1
-  phase "sanitizer tests" ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE e2e \
+  phase "sanitizer tests" ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE 'e2e|browser|blender' \
     -E 'KillResume|PrecisionsThroughOptimize|RunTest\.KilledAndResumed|KernelFit\.ThinParts|SdfShippedMeshes\.BunnyAndTooth|ModulusCli\.BunnyModulusMesh'
 fi

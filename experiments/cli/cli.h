@@ -30,6 +30,7 @@ void AddBenchPrecisionCommands(CLI::App& bench);          // bench precision (be
 void AddBenchBandCommand(CLI::App& bench);                // bench band
 void AddRunCommand(CLI::App& app);      // run: JSON experiments end to end (experiments/cli/run.cpp)
 void AddFilmCommand(CLI::App& app);     // film: the parameter space as a film (experiments/cli/film.cpp)
+void AddReportHtmlCommand(CLI::App& app);  // report-html: a results folder's report.html (run.cpp)
 // Every subcommand above, in this order, and `settings` (experiments/cli/commands.cpp).
 void AddCommands(CLI::App& app);
 

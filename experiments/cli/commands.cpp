@@ -35,6 +35,7 @@ void AddCommands(CLI::App& app) {
   AddBenchBandCommand(*bench);
   AddRunCommand(app);
   AddFilmCommand(app);
+  AddReportHtmlCommand(app);
   AddSettingsCommand(app);
 }
 

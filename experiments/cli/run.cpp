@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "experiments/cli/cli.h"
+#include "experiments/pipeline/report_html.h"
 #include "experiments/pipeline/run.h"
 #include "util/progress.h"
 
@@ -32,6 +33,44 @@ void AddRunCommand(CLI::App& app) {
     const pipeline::Experiment e = pipeline::Experiment::FromFile(a->experiment);
     const pipeline::RunSummary s = pipeline::RunExperiment(e, a->run);
     if (a->run.check_only) std::printf("%s\n", s.resolved.dump(2).c_str());
+  });
+}
+
+void AddReportHtmlCommand(CLI::App& app) {
+  struct Args {
+    std::string results;
+    std::vector<std::string> meshes;
+    bool only = false;
+    pipeline::ReportHtmlOptions html;
+  };
+  auto a = std::make_shared<Args>();
+  CLI::App* c = app.add_subcommand(
+      "report-html", "Write RESULTS/report.html: report.md as one self-contained page with a 3D viewer (orbit, "
+                     "zoom) of the run's meshes (target, Julia set, intricate surface, ...) decimated to a browser's "
+                     "budget; `quijibo run` writes it too (outputs.report_html)");
+  c->add_option("results", a->results, "The results folder (with report.md)")->required()->check(CLI::ExistingDirectory);
+  c->add_option("--mesh", a->meshes, "Also show this mesh: NAME=PATH (repeatable)");
+  c->add_flag("--only", a->only, "Show only the --mesh meshes, not the run's");
+  c->add_option("--max-triangles", a->html.max_triangles_per_mesh, "Triangles per mesh at most")
+      ->capture_default_str()
+      ->check(CLI::Range(std::int64_t(1), std::int64_t(1) << 31));
+  c->add_option("--max-total", a->html.max_triangles_total, "Triangles of all meshes at most")
+      ->capture_default_str()
+      ->check(CLI::Range(std::int64_t(1), std::int64_t(1) << 31));
+  c->callback([a] {
+    std::vector<pipeline::ViewerMesh> meshes;
+    if (!a->only) meshes = pipeline::RunMeshes(a->results);
+    for (const std::string& m : a->meshes) {
+      const std::size_t eq = m.find('=');
+      if (eq == std::string::npos || eq == 0 || eq + 1 == m.size())
+        throw Error("--mesh " + m + ": expected NAME=PATH");
+      meshes.push_back({m.substr(0, eq), m.substr(0, eq), m.substr(eq + 1)});
+    }
+    const pipeline::ReportHtmlSummary s = pipeline::WriteReportHtml(a->results, meshes, a->html);
+    std::printf("%s: %.1f MB", s.path.c_str(), double(s.bytes) / 1e6);
+    for (const auto& m : s.meshes)
+      std::printf(", %s %lld of %lld triangles", m.name.c_str(), (long long)m.triangles_out, (long long)m.triangles_in);
+    std::printf("%s\n", s.viewer ? "" : " (no 3D viewer: its script was not found)");
   });
 }
 

@@ -68,7 +68,11 @@ const Schema<OutputsOptions>& OutputsOptions::Settings() {
           .Boolean("plot", "", "The convergence plot", [](auto& o) -> bool& { return o.plot; })
           .Doc("the convergence plot (needs gnuplot)")
           .Boolean("report", "", "report.md", [](auto& o) -> bool& { return o.report; })
-          .Doc("`report.md`");
+          .Doc("`report.md`")
+          .Boolean("report_html", "", "report.html: report.md with a 3D viewer of the meshes",
+                   [](auto& o) -> bool& { return o.report_html; })
+          .Doc("`report.html`: report.md as one self-contained page with a 3D viewer of the meshes "
+               "(three.js; meshes decimated to 500,000 triangles in all); written when `report` is on");
   return s;
 }
 

@@ -25,6 +25,7 @@ struct OutputsOptions {
   std::optional<std::string> folder;  // the results folder; unset: results/<name> (--out overrides)
   bool plot = true;                   // the convergence plot (needs gnuplot)
   bool report = true;                 // report.md
+  bool report_html = true;            // report.html beside it (report_html.h); needs report
   static const Schema<OutputsOptions>& Settings();
 };
 

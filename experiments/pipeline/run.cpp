@@ -19,6 +19,7 @@
 #include "experiments/pipeline/plot.h"
 #include "experiments/pipeline/quality.h"
 #include "experiments/pipeline/triptych.h"
+#include "experiments/pipeline/report_html.h"
 #include "mesh/fidelity.h"
 #include "mesh/sdf_command.h"
 #include "util/error.h"
@@ -193,6 +194,7 @@ class Runner {
     const RunState state{stage_, reason, resume_};
     WriteFileAtomically(P("run.json"), RunJson(records_, Seconds(), &state).dump(1) + "\n");
     std::error_code ec;
+    fs::remove(P("report.html"), ec);  // written again when the run ends
     if (e_.outputs.report)
       WriteFileAtomically(P("report.md"), RunReport(e_, records_, results_, Seconds(), state));
     else
@@ -630,6 +632,11 @@ RunSummary RunExperiment(const Experiment& e, const RunOptions& o) {
   WriteFileAtomically(out + "/experiment.resolved.json", summary.resolved.dump(2) + "\n");
   WriteFileAtomically(out + "/run.json", runner.RunJson(summary.stages, summary.seconds, nullptr).dump(1) + "\n");
   if (e.outputs.report) WriteFileAtomically(out + "/report.md", RunReport(e, summary.stages, out, summary.seconds));
+  if (e.outputs.report && e.outputs.report_html) try {
+      WriteReportHtml(out, RunMeshes(out));
+    } catch (const Error& x) {  // the results stand without it
+      std::fprintf(stderr, "quijibo: report.html not written: %s\n", x.what());
+    }
   if (!o.quiet) {
     std::fprintf(stderr, "quijibo: done in %s. Results in %s/\n", FormatDuration(summary.seconds).c_str(), out.c_str());
     if (e.outputs.report) std::fprintf(stderr, "quijibo: start with %s/report.md\n", out.c_str());

@@ -89,7 +89,8 @@ TEST(RunTest, ATinyExperimentRunsEndToEndAndIsReusedWhenUnchanged) {
                         "initial/target.frame.json", "initial/map.json", "optimized/map.json", "optimized/log.jsonl",
                         "optimized/summary.json", "optimized/checkpoint.json", "mesh/julia.ply", "mesh/julia.vdb",
                         "mesh/summary.json", "pictures/slice-n1.png", "pictures/render.png",
-                        "intricate/summary.json", "triptych/triptych.json", "triptych/set.png", "triptych/triptych.png"})
+                        "intricate/summary.json", "triptych/triptych.json", "triptych/set.png", "triptych/triptych.png",
+                        "report.html"})
     EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
   if (HaveGnuplot()) {
     EXPECT_TRUE(fs::exists(out + "/plot/convergence.png"));
@@ -134,13 +135,14 @@ TEST(RunTest, AMeshTargetGoesThroughTheMonopoleStage) {
       {"optimizer", {{"schedule", "12(VF)"}, {"max_iterations", {{"V", 5}, {"F", 5}}}}},
       {"mesh", {{"enabled", false}}},
       {"pictures", {{"slice_size", 32}}},
-      {"outputs", {{"plot", false}}}};
+      {"outputs", {{"plot", false}, {"report_html", false}}}};
   Write(exp, e.dump(1));
   std::string err;
   ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
   for (const char* f : {"initial/roots.ply", "initial/potential.png", "initial/monopoles.json", "optimized/map.json",
                         "pictures/slice-n1.png", "report.md"})
     EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
+  EXPECT_FALSE(fs::exists(out + "/report.html"));  // outputs.report_html off
   EXPECT_NE(Slurp(out + "/report.md").find("Initial guess"), std::string::npos);
   fs::remove_all(dir);
 }
@@ -465,6 +467,7 @@ TEST(RunTest, AnInterruptInEachStageLeavesAnIncompleteReportAndNoStaleOutputs) {
                                                                : stage);
     const std::string report = Slurp(out + "/report.md");
     EXPECT_EQ(report.rfind("# tiny (INCOMPLETE)", 0), 0u) << stage << ": " << report;
+    EXPECT_FALSE(fs::exists(out + "/report.html")) << stage;  // the finished run's page is gone
     EXPECT_NE(report.find("**INCOMPLETE:** the run stopped in stage"), std::string::npos) << report;
     EXPECT_NE(report.find("interrupted (SIGINT)"), std::string::npos) << report;
     EXPECT_NE(report.find("quijibo run " + exp + " --out " + out + " --resume"), std::string::npos) << report;
@@ -481,6 +484,7 @@ TEST(RunTest, AnInterruptInEachStageLeavesAnIncompleteReportAndNoStaleOutputs) {
   EXPECT_EQ(Slurp(dir + "/mesh/report.md").find("INCOMPLETE"), std::string::npos);
   EXPECT_EQ(RunRecord(dir + "/mesh")["complete"], true);
   EXPECT_TRUE(fs::exists(dir + "/mesh/pictures/render.png"));
+  EXPECT_TRUE(fs::exists(dir + "/mesh/report.html"));
   // Interrupted before any stage finished, a results folder the run created goes again.
   EXPECT_EQ(RunQ({"run", exp, "--out", dir + "/fresh", "--quiet"}, &err, nullptr, 0,
                  "QUIJIBO_TEST_SIGNAL_IN_STAGE=initial"),

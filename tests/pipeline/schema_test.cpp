@@ -46,7 +46,7 @@ TEST(ExperimentSchema, AMinimalQuijiboExperimentResolvesToTheOptionsDefaults) {
   mesh.optimizer = "optimized";
   EXPECT_EQ(r["mesh"], mesh.ToJson());
   EXPECT_EQ(r["pictures"], PicturesOptions().ToJson());
-  EXPECT_EQ(r["outputs"], json({{"plot", true}, {"report", true}}));
+  EXPECT_EQ(r["outputs"], json({{"plot", true}, {"report", true}, {"report_html", true}}));
   EXPECT_EQ(r["seed"], json(kDefaultSeed));
   // The values the documentation promises, from the structs that own them.
   EXPECT_EQ(r["target"]["padding"], FractalFrame{}.padding);
