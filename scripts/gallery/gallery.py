@@ -133,8 +133,8 @@ def versor_hue(v, shape):
 def render(mesh, name, size=None, views=1):
     """`quijibo picture render` of a mesh (one view by default): the image array."""
     out = work("render", f"{name}.png")
-    run(QUIJIBO, "picture", "render", mesh, "-o", out, "--render-size", size or pick(320, 64),
-        "--render-views", views)
+    run(QUIJIBO, "picture", "render", mesh, "-o", out, "--size", size or pick(320, 64),
+        "--views", views)
     return plt.imread(out)
 
 

@@ -4,8 +4,8 @@ Fig. 3: a 4-root polynomial whose rightmost root is dragged towards the centre (
 Fig. 4: a 5-root rational whose bottom root is dragged towards the set (Property 2).
 Fig. 5: the centre root's multiplicity 1 -> 3 -> 7 (Property 3).
 The maps are experiments/gallery/maps/2015-fig{3,4,5}-*.json (roots in the z = 0 plane). Each
-frame: top, `quijibo mesh -n 4` rendered by `quijibo picture render` (front view, looking down z);
-bottom, the z = 0 slice of the same set (`quijibo-fields`, 4 applications, escape 2000: the mesh
+frame: top, `quijibo mesh -n 4` rendered by `quijibo picture render` (front view, looking down z;
+`--detail 0`: the map as written, not smoothed); bottom, the z = 0 slice of the same set (`quijibo-fields`, 4 applications, escape 2000: the mesh
 stage's defaults), black inside, top roots blue, bottom roots red.
 Run: PYTHONPATH=build/python /usr/bin/python3 scripts/gallery/qj2015_roots.py [3 4 5]
 """
@@ -28,7 +28,7 @@ def frame(fig_no, letter):
     path = g.EXPERIMENTS / "maps" / f"2015-fig{fig_no}-{letter}.json"
     m = json.loads(path.read_text())
     mesh = g.work("2015-roots", f"fig{fig_no}{letter}.ply")
-    g.run(g.QUIJIBO, "mesh", path, "-o", mesh, "-r", g.pick(128, 24), "-n", 4, "--allow-empty")
+    g.run(g.QUIJIBO, "mesh", path, "-o", mesh, "-r", g.pick(128, 24), "-n", 4, "--detail", 0, "--allow-empty")
     image = g.render(mesh, f"2015-fig{fig_no}{letter}")
     pts, shape = g.plane(BOX, g.pick(360, 48))
     f = g.fields(g.map_spec(path), pts, f"2015-fig{fig_no}{letter}")
