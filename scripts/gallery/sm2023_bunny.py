@@ -35,23 +35,30 @@ def spec(shape, versor):
             "alpha": ALPHA, "beta": BETA, "versor": versor, "iterations": 3, "escape_radius": 20}
 
 
+def versor_slice(ax, box, at, axis, name, title):
+    """d(x) on a plane (RGB = i, j, k), the target's outline (white) and the set's (black)."""
+    pts, shape = g.plane(box, g.pick(400, 40), at=at, axis=axis)
+    f = g.fields(spec("bunny", {"polynomial": str(POLY)}), pts, name)
+    ax.imshow(g.versor_rgb(f, shape), extent=(box[0], box[2], box[1], box[3]))
+    # The target's outline: phi + beta = log r / alpha = 0 at one application.
+    u = np.linspace(box[0], box[2], shape[1])
+    v = np.linspace(box[3], box[1], shape[0])
+    ax.contour(u, v, f[:, 1].reshape(shape), levels=[0], colors="white", linewidths=0.8)
+    ax.contour(u, v, f[:, 0].reshape(shape), levels=[0], colors="black", linewidths=0.5)
+    ax.set_title(title, fontsize=8)
+
+
 def fig9():
     box = (-0.5, -0.5, 0.5, 0.5)
-    pts, shape = g.plane(box, g.pick(400, 40))
-    f = g.fields(spec("bunny", {"polynomial": str(POLY)}), pts, "2023-fig9")
-    fig, axes = g.plt.subplots(1, 2, figsize=(8.2, 4.2))
+    fig, axes = g.plt.subplots(1, 3, figsize=(11.4, 4.1))
     axes[0].imshow(g.render(modulus_mesh("bunny", "bunny-clustered", "--poly", POLY), "2023-fig9", size=360))
     axes[0].set_title("shape modulus Julia set (front view)", fontsize=9)
-    axes[1].imshow(g.versor_rgb(f, shape), extent=(box[0], box[2], box[1], box[3]))
-    # The target's outline: phi + beta = log r / alpha = 0 at one application.
-    x = np.linspace(box[0], box[2], shape[1])
-    y = np.linspace(box[3], box[1], shape[0])
-    axes[1].contour(x, y, f[:, 1].reshape(shape), levels=[0], colors="white", linewidths=0.8)
-    axes[1].contour(x, y, f[:, 0].reshape(shape), levels=[0], colors="black", linewidths=0.5)
-    axes[1].set_title("d(x) on z = 0 (RGB = i, j, k); white: phi = -beta, black: the set", fontsize=8)
+    versor_slice(axes[1], box, 0.0, "z", "2023-fig9-z", "d(x) on z = 0 (x right, y up)")
+    versor_slice(axes[2], box, 0.2, "x", "2023-fig9-x", "d(x) on x = 0.2 (y right, z up)")
     for ax in axes:
         g.blank(ax)
-    fig.suptitle("2023 Fig. 9: rings of a clustered-root versor, bunny", fontsize=10)
+    fig.suptitle("2023 Fig. 9: a clustered-root versor on the bunny (RGB = i, j, k; white: phi = -beta, black: "
+                 "the set)", fontsize=9)
     fig.tight_layout()
     g.save(fig, "2023-fig9")
 
