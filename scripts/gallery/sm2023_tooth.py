@@ -53,16 +53,31 @@ def fig2(m, run_dir, pts, shape, f):
     g.save(fig, "2023-fig2")
 
 
-def choose(pts, f):
-    """Indices of (captured, escaping) points for each panel; see the module's docstring."""
+def circle_fate(inside, shape, r):
+    """On the sampled plane: whether the circle |q| = r lies wholly inside the set (+1), wholly
+    outside (-1) or crosses it (0)."""
+    t = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+    u, v = r * np.cos(t), r * np.sin(t)
+    col = np.clip(((u - BOX[0]) / (BOX[2] - BOX[0]) * shape[1]).astype(int), 0, shape[1] - 1)
+    row = np.clip(((BOX[3] - v) / (BOX[3] - BOX[1]) * shape[0]).astype(int), 0, shape[0] - 1)
+    m = inside.reshape(shape)[row, col]
+    return 1 if m.all() else (-1 if not m.any() else 0)
+
+
+def choose(pts, f, shape):
+    """Indices of (captured, escaping) points for each panel; see the module's docstring. Left: a
+    captured point whose circle |q| = r(x) lies inside the set on this plane and an escaping point
+    whose circle lies outside it, both circles inside the picture; right: two points of the shell
+    with the closest log r and different fates."""
     lr, field = f[:, 1], f[:, 0]
     inside = field < 0
-    d = np.linalg.norm(pts[:, :2], axis=1)
-    near = d < 1.6  # stay well inside the picture
-    deep = np.flatnonzero(near & inside & (lr < -4))
-    far = np.flatnonzero(near & ~inside & (lr > 4))
-    a = deep[np.argmin(np.abs(lr[deep] + 6))] if len(deep) else None
-    b = far[np.argmin(np.abs(lr[far] - 6))] if len(far) else None
+    near = np.linalg.norm(pts[:, :2], axis=1) < 1.6  # the points and their circles stay in view
+    picks = []
+    for want, target in ((True, -1.0), (False, np.log(1.85))):
+        cand = np.flatnonzero(near & (inside == want) & (np.abs(lr - target) < 0.3))
+        cand = cand[np.argsort(np.abs(lr[cand] - target))][:200]
+        ok = [i for i in cand if circle_fate(inside, shape, np.exp(lr[i])) == (1 if want else -1)]
+        picks.append(ok[0] if ok else None)
     # Same r, different fate: pairs of shell points (|log r| < 0.5) whose log r agree best.
     shell = np.flatnonzero(near & (np.abs(lr) < 0.5))
     si, so = shell[inside[shell]], shell[~inside[shell]]
@@ -76,11 +91,11 @@ def choose(pts, f):
                 gap = abs(lr[so[j]] - lr[i])
                 if best is None or gap < best[0]:
                     best = (gap, i, so[j])
-    return (a, b), (best[1], best[2]) if best else (None, None)
+    return tuple(picks), (best[1], best[2]) if best else (None, None)
 
 
 def fig3(pts, shape, f, orbits):
-    panels = choose(pts, f)
+    panels = choose(pts, f, shape)
     fig, axes = g.plt.subplots(1, 2, figsize=(8.4, 4.2))
     lines = []
     for ax, pair, title in zip(axes, panels, ("r(x) decides", "same r(x), d(x) decides")):
@@ -96,6 +111,8 @@ def fig3(pts, shape, f, orbits):
             ax.annotate("", xy=end, xytext=x[:2], arrowprops=dict(arrowstyle="->", color=colour, lw=1.2))
             ax.plot(*x[:2], "o", color=colour, mec="grey", ms=6)
             fate = "inside" if f[idx, 0] < 0 else "escapes"
+            fate += ", circle " + {1: "inside the set", -1: "outside the set", 0: "crosses the set"}[
+                circle_fate(f[:, 0] < 0, shape, r)]
             lines.append(f"{title}: x = ({x[0]:.3f}, {x[1]:.3f}), log r = {f[idx, 1]:.3f}, |f(x)| = {r:.3g}, "
                          f"{fate} (log|q_4| = {f[idx, 0]:.3g})")
         ax.set_xlim(BOX[0], BOX[2])
