@@ -39,21 +39,23 @@ def transform(p, x):
 
 
 def fig3():
-    panels = (("base set M (no portal)", "portal-one-copy.json", False),
-              ("one portal: one copy", "portal-one-copy.json", True),
-              ("nested copies", "portal-nested.json", True))
-    fig, axes = g.plt.subplots(1, 3, figsize=(11.4, 4.0))
-    for ax, (title, name, with_portal) in zip(axes, panels):
+    zoom = (0.6, 0.02, 0.96, 0.38)  # around the portal disc
+    panels = (("base set M (no portal)", "portal-one-copy.json", False, None),
+              ("one portal: one copy", "portal-one-copy.json", True, None),
+              ("nested copies", "portal-nested.json", True, None),
+              ("nested copies, the portal zoomed", "portal-nested.json", True, zoom))
+    fig, axes = g.plt.subplots(1, 4, figsize=(13.6, 3.6), gridspec_kw={"width_ratios": [1.4, 1.4, 1.4, 1]})
+    for i, (ax, (title, name, with_portal, view)) in enumerate(zip(axes, panels)):
         spec = bunny_spec(name)
         portals = spec["portals"]
         if not with_portal:
             spec["portals"] = []
-        box = tuple(spec["box"])
+        box = view or tuple(spec["box"])
         pts, shape = g.plane(box, g.pick(420, 48))
-        f = g.fields(spec, pts, f"2024-fig3-{name[:-5]}-{int(with_portal)}")
+        f = g.fields(spec, pts, f"2024-fig3-{i}")
         ax.imshow(np.where(f[:, 0].reshape(shape) < 0, 0.0, 0.93), cmap="gray", vmin=0, vmax=1,
                   extent=(box[0], box[2], box[1], box[3]))
-        if with_portal:
+        if with_portal and view is None:
             for p in portals:
                 c, r = np.array(p["mask"]["center"][:2]), p["mask"]["radius"]
                 ax.add_patch(g.plt.Circle(c, r, fill=False, color="tab:orange", lw=1))
