@@ -3,9 +3,9 @@ on the target's surface, one polynomial on two shapes, one r(x) with several d(x
 
 Fig. 9: `quijibo modulus data/bunny.obj --poly experiments/gallery/clustered-poly6.json` (six roots
   clustered tightly inside the bunny, as the paper says of its Figs. 1, 9 and 11), rendered, and the
-  versor d(x) on the slice z = 0 (`quijibo-fields`, RGB = i, j, k) with the target's outline.
-Fig. 10: d(x) at the bunny's surface (the paper uses a hand; `quijibo-fields` at the faces' centroids
-  of the unit-frame bunny, drawn with matplotlib), beside the target and the set.
+  versor d(x) on the slices z = 0 and x = 0.2 (`quijibo-fields`, RGB = i, j, k) with the target's outline.
+Fig. 10: d(x) at the bunny's surface (the paper uses a hand; `quijibo-fields` at the centroids of the
+  unit-frame bunny's faces, each cut into 16, drawn with matplotlib), beside the target and the set.
 Fig. 11: the same polynomial on the bunny and on the tooth.
 Fig. 12: the bunny with four generated versors (seeds 1-4: 10 roots in the bunny's box).
 All at alpha 30, beta -0.02 (the authors' baseline), 3 applications, escape 20, unit frame.
@@ -24,9 +24,14 @@ ALPHA, BETA = 30, -0.02
 
 
 def modulus_mesh(shape, name, *versor):
-    out = g.work("2023-bunny", f"{name}.ply")
+    """`quijibo modulus` of a shape; a mesh this process or an earlier figure made with the same
+    settings (the file name holds them) is reused."""
+    res = g.pick(192, 24)
+    out = g.work("2023-bunny", f"{name}-a{ALPHA}-b{BETA}-r{res}.ply")
+    if out.exists():
+        return out
     g.run(g.QUIJIBO, "modulus", g.ROOT / "data" / f"{shape}.obj", *versor, "--alpha", ALPHA, "--beta", BETA,
-          "-r", g.pick(192, 24), "-o", out)
+          "-r", res, "-o", out)
     return out
 
 
@@ -71,9 +76,18 @@ def unit_frame_bunny():
     return (v - 0.5 * (lo + hi)) * ((100 / 110) / (hi - lo).max()), np.asarray(faces)
 
 
-def shaded(ax, v, faces, colours):
-    """Faces as a matplotlib 3D collection, looking along -z (the render's front view)."""
-    tri = v[faces]
+def subdivide(tri, levels):
+    """Each triangle (T, 3, 3) into 4^levels by midpoints: the versor varies faster than the
+    bunny's faces are wide."""
+    for _ in range(levels):
+        a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+        ab, bc, ca = (a + b) / 2, (b + c) / 2, (c + a) / 2
+        tri = np.concatenate([np.stack(t, axis=1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+    return tri
+
+
+def shaded(ax, tri, colours):
+    """Triangles (T, 3, 3) as a matplotlib 3D collection, looking along -z (the render's front view)."""
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     n /= np.linalg.norm(n, axis=1, keepdims=True) + 1e-30
     light = np.clip(np.abs(n @ np.array([-0.35, 0.45, 0.82])), 0.25, 1)[:, None]
@@ -86,7 +100,8 @@ def shaded(ax, v, faces, colours):
 
 def fig10():
     v, faces = unit_frame_bunny()
-    centroids = v[faces].mean(axis=1)
+    tri = subdivide(v[faces], g.pick(2, 0))
+    centroids = tri.mean(axis=1)
     f = g.fields(spec("bunny", {"polynomial": str(POLY)}), centroids, "2023-fig10")
     phi = g.fields(spec("bunny", {"polynomial": str(POLY)}) | {"alpha": 1, "beta": 0}, v, "2023-fig10-phi")[:, 1]
     # The normalization must put the mesh on the target's zero set (within the SDF's cell, 1/100).
@@ -94,15 +109,13 @@ def fig10():
         sys.exit(f"fig10: the unit-frame bunny is off the target's surface (max |phi| {np.abs(phi).max():.3f})")
     fig = g.plt.figure(figsize=(10.5, 3.9))
     ax = fig.add_subplot(1, 3, 1, projection="3d")
-    shaded(ax, v, faces, np.full((len(faces), 3), 0.8))
+    shaded(ax, v[faces], np.full((len(faces), 3), 0.8))
     ax.set_title("target", fontsize=9)
     ax = fig.add_subplot(1, 3, 2, projection="3d")
-    shaded(ax, v, faces, np.clip(0.5 + 0.5 * f[:, 3:6], 0, 1))
+    shaded(ax, tri, np.clip(0.5 + 0.5 * f[:, 3:6], 0, 1))
     ax.set_title("d(x) on the target's surface (RGB = i, j, k)", fontsize=9)
     ax = fig.add_subplot(1, 3, 3)
-    mesh = g.work("2023-bunny", "bunny-clustered.ply")
-    if not mesh.exists():
-        modulus_mesh("bunny", "bunny-clustered", "--poly", POLY)
+    mesh = modulus_mesh("bunny", "bunny-clustered", "--poly", POLY)
     ax.imshow(g.render(mesh, "2023-fig10", size=360))
     ax.set_title("the Julia set", fontsize=9)
     g.blank(ax)
