@@ -6,7 +6,7 @@ Environment:
   QUIJIBO_BUILD_DIR   build folder (default build/)
   GALLERY_WORK        scratch folder for meshes, runs and arrays (default results/gallery)
   GALLERY_IMAGES      where the PNGs go (default docs/images/gallery)
-  GALLERY_SCALE       "full" (the checked-in pictures) or "test" (tiny, for tests/gallery)
+  GALLERY_SCALE       "full" (the checked-in pictures) or "test" (tiny, for tests/python/test_gallery.py)
 The Julia sets, fields, weights and meshes all come from the toolkit (`quijibo`, `quijibo-fields`);
 numpy and matplotlib only arrange, colour and annotate them.
 """

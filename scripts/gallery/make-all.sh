@@ -4,7 +4,7 @@
 # and the Python module) and /usr/bin/python3 with numpy and matplotlib.
 #   scripts/gallery/make-all.sh            # everything (time: see docs/gallery.md)
 #   scripts/gallery/make-all.sh 2015-3 2023-8   # some figures only
-# GALLERY_SCALE=test makes tiny versions (tests/gallery); GALLERY_IMAGES / GALLERY_WORK move the outputs.
+# GALLERY_SCALE=test makes tiny versions (tests/python/test_gallery.py); GALLERY_IMAGES / GALLERY_WORK move the outputs.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 export PYTHONPATH="${QUIJIBO_BUILD_DIR:-build}/python${PYTHONPATH:+:$PYTHONPATH}"
