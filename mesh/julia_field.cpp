@@ -31,8 +31,8 @@ BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, d
   BatchField field;
   field.iso = iso;
   field.value_margin = kLogModulusValueMargin;
-  if (precision == Precision::kDouble && kernel == JuliaKernel::kVector) {
-    auto jb = std::make_shared<const JuliaBatch>(map, options);
+  if (precision == Precision::kDouble && kernel != JuliaKernel::kScalar) {
+    auto jb = std::make_shared<const JuliaBatch>(map, options, true, kernel == JuliaKernel::kFused);
     field.evaluate = [jb, stats](const Vec3* points, std::size_t n, double* values) {
       std::vector<JuliaResult<double>> r(n);
       jb->At(points, n, r.data());

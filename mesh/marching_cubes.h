@@ -38,6 +38,10 @@ struct MeshingOptions {
   static constexpr ValueRange kResolutionRange{2, 65536};
   int bisection_steps = 6;            // reference: 6 steps ...
   double bisection_tolerance = 1e-8;  // ... or |f - iso| below this
+  // Added by issue 40: after the steps, place the vertex where the line through the last bracket's
+  // end values crosses iso instead of at the bracket's midpoint (0 steps allowed: plain marching
+  // cubes interpolation). Fewer steps for nearly the same vertices; docs/meshing.md "Bisection".
+  bool bisection_interpolate = false;
   bool sparse = true;                 // coarse-to-fine block search; false evaluates every node
   int tile_cells = 32;                // cells per tile side (the unit of parallel work and memory)
   int coarse_margin_cells = 2;        // safety margin of the sparse block search, in fine cells
