@@ -247,7 +247,7 @@ std::vector<PendingVertex> TileTriangles(const Geometry& geo, const std::array<i
 
 // Bisection on all crossing edges of the tile at once; each vertex is its edge's last midpoint, or
 // with o.bisection_interpolate the point where the line through the last bracket's end values
-// crosses iso (in e^f for a log-modulus field; the midpoint when an end value is not finite).
+// crosses iso (the midpoint when an end value is not finite).
 void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vector<PendingVertex>& pending,
                     Counters& counters, TilePiece& out) {
   const double iso = field.iso;
@@ -288,13 +288,10 @@ void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vecto
     }
   }
   if (!o.bisection_interpolate) return;
-  // The interpolated quantity: f - iso, or e^(f - iso) - 1 for a log-modulus field.
-  auto g = [&](double f) { return field.log_modulus ? std::expm1(std::clamp(f - iso, -700.0, 700.0)) : f - iso; };
   for (std::size_t v = 0; v < nv; ++v) {
     const PendingVertex& p = pending[v];
     if (done[v] || !std::isfinite(p.fa) || !std::isfinite(p.fb) || p.fa == p.fb) continue;
-    const double ga = g(p.fa), gb = g(p.fb);
-    const double t = std::clamp(-ga / (gb - ga), 0.0, 1.0);
+    const double t = std::clamp((iso - p.fa) / (p.fb - p.fa), 0.0, 1.0);
     out.vertex_positions[v] = {p.a[0] + t * (p.b[0] - p.a[0]), p.a[1] + t * (p.b[1] - p.a[1]),
                                p.a[2] + t * (p.b[2] - p.a[2])};
   }

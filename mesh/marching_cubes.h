@@ -29,9 +29,9 @@ struct BatchField {
   // one of them lies within this of iso (field units; 0: off). Fields with sub-cell detail near
   // the surface set it (log|q_n| fields: 2.0, julia_field.h); a distance field keeps 0.
   double value_margin = 0.0;
-  // Added by issue 40: the values are log|q| of a map (log-modulus fields): the final
-  // interpolation of MeshingOptions::bisection_interpolate is then linear in |q| = e^f, which is
-  // nearly linear across the surface, where f's concavity (f'' = g''/g - (g'/g)^2) would shrink the set.
+  // Added by issue 40: the values are log|q| of a map (log-modulus fields; set by julia_field.h).
+  // Not used by the mesher: interpolating bisection's last bracket in |q| = e^f instead of f was
+  // measured and moved vertices further (docs/benchmarks.md §21), so both are linear in f.
   bool log_modulus = false;
 };
 
