@@ -70,11 +70,10 @@ inline constexpr double kSinCosMax = 8.0e5;
   const double p = (((P0 * z + P1) * z + P2) * z + P3) * z + P4;
   const double q = ((((z + Q0) * z + Q1) * z + Q2) * z + Q3) * z + Q4;
   const double a = y0 + ((t * (z * p / q) + t) + more);  // atan(y / |x|) in [0, pi/2]
-  // The sign bit by an integer compare (std::signbit and std::isnan keep GCC from vectorizing).
-  const bool negative = std::bit_cast<std::int64_t>(x) < 0;
-  const double r = negative ? (PI_HI - a) + PI_LO : a;
-  // y = 0 (0 / 0 above when x = 0 too): 0 or pi by the sign of x; NaN stays NaN.
-  const double zero = negative ? PI_HI : 0.0;
+  const double r = x < 0 ? (PI_HI - a) + PI_LO : a;
+  // y = 0 (0 / 0 above when x = 0 too): 0 or pi by the sign bit of x (atan2(0, -0) = pi), taken by
+  // an integer compare (std::signbit and std::isnan keep GCC from vectorizing); NaN stays NaN.
+  const double zero = std::bit_cast<std::int64_t>(x) < 0 ? PI_HI : 0.0;
   return y == 0 && x == x ? zero : r;
 }
 
