@@ -31,8 +31,9 @@ BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, d
   BatchField field;
   field.iso = iso;
   field.value_margin = kLogModulusValueMargin;
-  if (precision == Precision::kDouble && kernel == JuliaKernel::kVector) {
-    auto jb = std::make_shared<const JuliaBatch>(map, options);
+  field.log_modulus = true;
+  if (precision == Precision::kDouble && kernel != JuliaKernel::kScalar) {
+    auto jb = std::make_shared<const JuliaBatch>(map, options, true, kernel == JuliaKernel::kFused);
     field.evaluate = [jb, stats](const Vec3* points, std::size_t n, double* values) {
       std::vector<JuliaResult<double>> r(n);
       jb->At(points, n, r.data());
@@ -57,6 +58,7 @@ BatchField MakeQuaternionMapField(std::shared_ptr<const QuaternionMap> map, cons
   BatchField f;
   f.iso = 0.0;
   f.value_margin = kLogModulusValueMargin;
+  f.log_modulus = true;
   f.evaluate = [map, o, point_scale](const Vec3* p, std::size_t n, double* out) {
     for (std::size_t i = 0; i < n; ++i)
       out[i] = IterateField(*map, {point_scale * p[i][0], point_scale * p[i][1], point_scale * p[i][2], 0.0}, o);

@@ -191,7 +191,7 @@ std::vector<double> TileNodeValues(const BatchField& field, const MeshLattice& l
 // A crossing edge whose vertex is still to be placed: its ends, a on the side of value fa.
 struct PendingVertex {
   Vec3 a, b;
-  double fa;
+  double fa, fb;
 };
 
 // The triangles of the active cells by the case table into `out` (with each vertex's global edge
@@ -232,7 +232,8 @@ std::vector<PendingVertex> TileTriangles(const Geometry& geo, const std::array<i
                 out.vertex_edges.push_back(3 * geo.node_id(g[0], g[1], g[2]) + E[e].axis);
                 const Vec3 a = l.node(g[0], g[1], g[2]);
                 g[E[e].axis] += 1;
-                pending.push_back({a, l.node(g[0], g[1], g[2]), value[s.local(ni, nj, nk)]});
+                const std::size_t other = s.local(ni + (E[e].axis == 0), nj + (E[e].axis == 1), nk + (E[e].axis == 2));
+                pending.push_back({a, l.node(g[0], g[1], g[2]), value[s.local(ni, nj, nk)], value[other]});
               }
               vid[e] = vertex_of[key];
             }
@@ -244,12 +245,18 @@ std::vector<PendingVertex> TileTriangles(const Geometry& geo, const std::array<i
   return pending;
 }
 
-// Bisection on all crossing edges of the tile at once; each vertex is its edge's last midpoint.
+// Bisection on all crossing edges of the tile at once; each vertex is its edge's last midpoint, or
+// with o.bisection_interpolate the point where the line through the last bracket's end values
+// crosses iso (the midpoint when an end value is not finite).
 void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vector<PendingVertex>& pending,
                     Counters& counters, TilePiece& out) {
   const double iso = field.iso;
   const std::size_t nv = pending.size();
   out.vertex_positions.resize(nv);
+  for (std::size_t v = 0; v < nv; ++v) {  // with 0 steps: the edge's midpoint before interpolation
+    const PendingVertex& p = pending[v];
+    out.vertex_positions[v] = {0.5 * (p.a[0] + p.b[0]), 0.5 * (p.a[1] + p.b[1]), 0.5 * (p.a[2] + p.b[2])};
+  }
   std::vector<char> done(nv, 0);
   std::vector<std::uint32_t> open;
   std::vector<Vec3> mid;
@@ -276,8 +283,17 @@ void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vecto
         p.fa = fm[q];
       } else {
         p.b = mid[q];
+        p.fb = fm[q];
       }
     }
+  }
+  if (!o.bisection_interpolate) return;
+  for (std::size_t v = 0; v < nv; ++v) {
+    const PendingVertex& p = pending[v];
+    if (done[v] || !std::isfinite(p.fa) || !std::isfinite(p.fb) || p.fa == p.fb) continue;
+    const double t = std::clamp((iso - p.fa) / (p.fb - p.fa), 0.0, 1.0);
+    out.vertex_positions[v] = {p.a[0] + t * (p.b[0] - p.a[0]), p.a[1] + t * (p.b[1] - p.a[1]),
+                               p.a[2] + t * (p.b[2] - p.a[2])};
   }
 }
 
@@ -315,7 +331,8 @@ std::string MeshingOptions::Validate() const {
   }
   if (auto why = CheckRange("resolution", SettingType::kInteger, resolution, kResolutionRange); !why.empty())
     return why;
-  if (bisection_steps < 1 || bisection_steps > 60) return "bisection steps must be in [1, 60]";
+  if (bisection_steps < (bisection_interpolate ? 0 : 1) || bisection_steps > 60)
+    return bisection_interpolate ? "bisection steps must be in [0, 60]" : "bisection steps must be in [1, 60]";
   if (!(bisection_tolerance >= 0) || !std::isfinite(bisection_tolerance)) return "bisection tolerance must be finite and >= 0";
   if (!pow2(block_cells)) return "block cells must be a power of 2";
   if (!pow2(search_stride) || search_stride < block_cells) return "search stride must be a power of 2 >= block cells";

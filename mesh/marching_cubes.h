@@ -29,6 +29,10 @@ struct BatchField {
   // one of them lies within this of iso (field units; 0: off). Fields with sub-cell detail near
   // the surface set it (log|q_n| fields: 2.0, julia_field.h); a distance field keeps 0.
   double value_margin = 0.0;
+  // Added by issue 40: the values are log|q| of a map (log-modulus fields; set by julia_field.h).
+  // Not used by the mesher: interpolating bisection's last bracket in |q| = e^f instead of f was
+  // measured and moved vertices further (docs/benchmarks.md §21), so both are linear in f.
+  bool log_modulus = false;
 };
 
 struct MeshingOptions {
@@ -38,6 +42,10 @@ struct MeshingOptions {
   static constexpr ValueRange kResolutionRange{2, 65536};
   int bisection_steps = 6;            // reference: 6 steps ...
   double bisection_tolerance = 1e-8;  // ... or |f - iso| below this
+  // Added by issue 40: after the steps, place the vertex where the line through the last bracket's
+  // end values crosses iso instead of at the bracket's midpoint (0 steps allowed: plain marching
+  // cubes interpolation). Fewer steps for nearly the same vertices; docs/meshing.md "Bisection".
+  bool bisection_interpolate = false;
   bool sparse = true;                 // coarse-to-fine block search; false evaluates every node
   int tile_cells = 32;                // cells per tile side (the unit of parallel work and memory)
   int coarse_margin_cells = 2;        // safety margin of the sparse block search, in fine cells

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "quijibo/vector_math.h"
 #include "util/error.h"
 
 // glibc's math-vector.h declares libmvec's variants only under -ffast-math (which would also drop
@@ -25,11 +26,14 @@ namespace quijibo {
 
 JuliaKernel ParseJuliaKernel(const std::string& name) {
   if (name == "vector") return JuliaKernel::kVector;
+  if (name == "fused") return JuliaKernel::kFused;
   if (name == "scalar") return JuliaKernel::kScalar;
-  throw Error("kernel: expected vector or scalar, found \"" + name + "\"");
+  throw Error("kernel: expected vector, fused or scalar, found \"" + name + "\"");
 }
 
-const char* JuliaKernelName(JuliaKernel kernel) { return kernel == JuliaKernel::kVector ? "vector" : "scalar"; }
+const char* JuliaKernelName(JuliaKernel kernel) {
+  return kernel == JuliaKernel::kVector ? "vector" : kernel == JuliaKernel::kFused ? "fused" : "scalar";
+}
 
 namespace {
 
@@ -52,21 +56,51 @@ struct Stream {
 // One factor on every lane, as JuliaMap::Apply with LogAndVersor: u <- u u(d)^e with
 // d = q - r (kZero: the iterate's versor) and, unless kZero, L <- L + e log|d|. Two loops: one of
 // calls, one of selects (GCC vectorizes neither kind inside the other).
-template <bool kZero>
+// kFused: quijibo's own log, atan2 and sincos (vector_math.h) instead of libmvec's, one loop and
+// one range reduction for sin and cos; a lane whose angle is beyond vm::kSinCosMax (or NaN) takes
+// libmvec's sin and cos (computed for the chunk only when a lane needs them).
+template <bool kZero, bool kFused>
 [[gnu::always_inline]] inline void ApplyFactor(Lanes& s, double rw, double rx, double ry, double rz, double e) {
   alignas(64) double dw[C], dx[C], dy[C], dz[C], vn[C], ln[C], c[C], sn[C];
+  if constexpr (kFused) {
+    alignas(64) double phi[C];
+    int far = 0;
+#pragma omp simd reduction(| : far)
+    for (int l = 0; l < C; ++l) {
+      dw[l] = kZero ? s.vw[l] : s.qw[l] - rw;
+      dx[l] = kZero ? s.vx[l] : s.qx[l] - rx;
+      dy[l] = kZero ? s.vy[l] : s.qy[l] - ry;
+      dz[l] = kZero ? s.vz[l] : s.qz[l] - rz;
+      const double v2 = dx[l] * dx[l] + dy[l] * dy[l] + dz[l] * dz[l];
+      vn[l] = std::sqrt(v2);
+      ln[l] = 0.5 * vm::VmLog(dw[l] * dw[l] + v2);
+      phi[l] = e * vm::VmAtan2(vn[l], dw[l]);
+      far |= !(std::fabs(phi[l]) < vm::kSinCosMax);
+      vm::VmSinCos(phi[l], sn[l], c[l]);
+    }
+    if (far) {  // per lane, so that a node's value does not depend on the other lanes
 #pragma omp simd
-  for (int l = 0; l < C; ++l) {
-    dw[l] = kZero ? s.vw[l] : s.qw[l] - rw;
-    dx[l] = kZero ? s.vx[l] : s.qx[l] - rx;
-    dy[l] = kZero ? s.vy[l] : s.qy[l] - ry;
-    dz[l] = kZero ? s.vz[l] : s.qz[l] - rz;
-    const double v2 = dx[l] * dx[l] + dy[l] * dy[l] + dz[l] * dz[l];
-    vn[l] = std::sqrt(v2);
-    ln[l] = 0.5 * std::log(dw[l] * dw[l] + v2);
-    const double phi = e * std::atan2(vn[l], dw[l]);
-    c[l] = std::cos(phi);
-    sn[l] = std::sin(phi);
+      for (int l = 0; l < C; ++l) {
+        const double cl = std::cos(phi[l]), sl = std::sin(phi[l]);
+        const bool lane_far = !(std::fabs(phi[l]) < vm::kSinCosMax);
+        c[l] = lane_far ? cl : c[l];
+        sn[l] = lane_far ? sl : sn[l];
+      }
+    }
+  } else {
+#pragma omp simd
+    for (int l = 0; l < C; ++l) {
+      dw[l] = kZero ? s.vw[l] : s.qw[l] - rw;
+      dx[l] = kZero ? s.vx[l] : s.qx[l] - rx;
+      dy[l] = kZero ? s.vy[l] : s.qy[l] - ry;
+      dz[l] = kZero ? s.vz[l] : s.qz[l] - rz;
+      const double v2 = dx[l] * dx[l] + dy[l] * dy[l] + dz[l] * dz[l];
+      vn[l] = std::sqrt(v2);
+      ln[l] = 0.5 * std::log(dw[l] * dw[l] + v2);
+      const double phi = e * std::atan2(vn[l], dw[l]);
+      c[l] = std::cos(phi);
+      sn[l] = std::sin(phi);
+    }
   }
 #pragma omp simd
   for (int l = 0; l < C; ++l) {
@@ -84,15 +118,16 @@ template <bool kZero>
 }
 
 // One application of the map on every lane (JuliaMap::Apply), then R(q) = versor e^L.
+template <bool kFused>
 [[gnu::always_inline]] inline void ApplyBody(const Stream& f, Lanes& s) {
   for (int l = 0; l < C; ++l) s.L[l] = f.ln_C, s.uw[l] = 1, s.ux[l] = 0, s.uy[l] = 0, s.uz[l] = 0;
   double zero_coefficient = 0;
   for (std::size_t j = 0; j < f.n; ++j) {
     if (f.zero[j]) {
-      ApplyFactor<true>(s, 0, 0, 0, 0, f.e[j]);
+      ApplyFactor<true, kFused>(s, 0, 0, 0, 0, f.e[j]);
       zero_coefficient += f.e[j];
     } else {
-      ApplyFactor<false>(s, f.w[j], f.x[j], f.y[j], f.z[j], f.e[j]);
+      ApplyFactor<false, kFused>(s, f.w[j], f.x[j], f.y[j], f.z[j], f.e[j]);
     }
   }
   if (zero_coefficient != 0) {
@@ -112,23 +147,26 @@ template <bool kZero>
 
 // The same code for the x86-64 baseline (libmvec's _ZGVbN2 variants) and for AVX2 + FMA
 // (_ZGVdN4), chosen at run time: the baseline never executes an instruction an old CPU lacks.
-void ApplySse2(const Stream& f, Lanes& s) { ApplyBody(f, s); }
+template <bool kFused>
+void ApplySse2(const Stream& f, Lanes& s) { ApplyBody<kFused>(f, s); }
 #if defined(__x86_64__)
-__attribute__((target("avx2,fma"))) void ApplyAvx2(const Stream& f, Lanes& s) { ApplyBody(f, s); }
+template <bool kFused>
+__attribute__((target("avx2,fma"))) void ApplyAvx2(const Stream& f, Lanes& s) { ApplyBody<kFused>(f, s); }
 
 bool CpuHasAvx2() {
   __builtin_cpu_init();
   return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 }
 #else
-void ApplyAvx2(const Stream& f, Lanes& s) { ApplyBody(f, s); }
+template <bool kFused>
+void ApplyAvx2(const Stream& f, Lanes& s) { ApplyBody<kFused>(f, s); }
 bool CpuHasAvx2() { return false; }
 #endif
 
 }  // namespace
 
-JuliaBatch::JuliaBatch(const RationalMap& map, const JuliaOptions& options, bool allow_avx2)
-    : scalar_(map, options) {
+JuliaBatch::JuliaBatch(const RationalMap& map, const JuliaOptions& options, bool allow_avx2, bool fused)
+    : scalar_(map, options), fused_(fused) {
   for (const auto& f : scalar_.Factors()) {
     root_w_.push_back(f.root.w), root_x_.push_back(f.root.x), root_y_.push_back(f.root.y), root_z_.push_back(f.root.z);
     exponent_.push_back(f.exponent);
@@ -153,7 +191,8 @@ void JuliaBatch::Iterate(const Quaternion<double>* q0, std::size_t n, JuliaResul
   }
   const Stream f{root_w_.data(), root_x_.data(), root_y_.data(), root_z_.data(), exponent_.data(), zero_.data(),
                  exponent_.size(), ln_C_};
-  void (*apply)(const Stream&, Lanes&) = avx2_ ? ApplyAvx2 : ApplySse2;
+  void (*apply)(const Stream&, Lanes&) = fused_ ? (avx2_ ? ApplyAvx2<true> : ApplySse2<true>)
+                                                : (avx2_ ? ApplyAvx2<false> : ApplySse2<false>);
   std::vector<std::size_t> active;
   active.reserve(n);
   Lanes s;

@@ -25,10 +25,12 @@
 
 namespace quijibo {
 
-// Which kernel evaluates the field (double precision; other precisions are always scalar).
-enum class JuliaKernel { kVector, kScalar };
-inline const std::vector<std::string> kJuliaKernelNames = {"vector", "scalar"};
-// "vector" or "scalar"; throws quijibo::Error otherwise.
+// Which kernel evaluates the field (double precision; other precisions are always scalar):
+// vector (libmvec's functions), fused (the same arithmetic with quijibo's own branch-free log, atan2
+// and sincos, vector_math.h, their error bounds stated there) or scalar (the reference).
+enum class JuliaKernel { kVector, kScalar, kFused };
+inline const std::vector<std::string> kJuliaKernelNames = {"vector", "fused", "scalar"};
+// "vector", "fused" or "scalar"; throws quijibo::Error otherwise.
 JuliaKernel ParseJuliaKernel(const std::string& name);
 const char* JuliaKernelName(JuliaKernel kernel);
 
@@ -37,8 +39,9 @@ class JuliaBatch {
   static constexpr int kLanes = 16;  // nodes per chunk (a multiple of every vector width used)
 
   // Throws quijibo::Error when the map or the options are invalid. `allow_avx2` false keeps the
-  // SSE variants on a CPU with AVX2 (tests run both).
-  JuliaBatch(const RationalMap& map, const JuliaOptions& options, bool allow_avx2 = true);
+  // SSE variants on a CPU with AVX2 (tests run both). `fused`: vector_math.h's functions instead of
+  // libmvec's (JuliaKernel::kFused).
+  JuliaBatch(const RationalMap& map, const JuliaOptions& options, bool allow_avx2 = true, bool fused = false);
 
   // out[i] = JuliaMap<double>::Iterate(q0[i]) up to the vector math library's rounding.
   void Iterate(const Quaternion<double>* q0, std::size_t n, JuliaResult<double>* out) const;
@@ -50,6 +53,7 @@ class JuliaBatch {
   // The instruction set this kernel runs with: "avx2" (AVX2 and FMA) or "sse2" (libmvec's SSE
   // variants pick SSE4.1 code themselves when the CPU has it).
   const char* isa() const { return avx2_ ? "avx2" : "sse2"; }
+  bool fused() const { return fused_; }
 
  private:
   JuliaMap<double> scalar_;
@@ -59,6 +63,7 @@ class JuliaBatch {
   double ln_C_ = 0, log_escape_ = 0, log_capture_ = 0;
   int iterations_ = 0;
   bool avx2_ = false;
+  bool fused_ = false;
 };
 
 }  // namespace quijibo

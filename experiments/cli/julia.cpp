@@ -9,12 +9,14 @@
 #include <ctime>
 #include <filesystem>
 #include <map>
+#include <random>
 #include <sstream>
 
 #include "experiments/cli/bind.h"
 #include "experiments/cli/cli.h"
 #include "experiments/pipeline/mesh.h"
 #include "experiments/pipeline/pictures.h"
+#include "mesh/julia_field.h"
 #include "mesh/sdf_command.h"
 #include "util/child_process.h"
 #include "util/error.h"
@@ -258,11 +260,48 @@ void AddPicture(CLI::App& app) {
   });
 }
 
+// For each kernel, which of `count` seeded random points of the mesh stage's box are inside the set
+// {log|q_n| < iso} the stage meshes (its iterated map, translation and settings): the volume IoU
+// of the kernels' sets without meshing.
+std::vector<std::vector<char>> KernelSetsAtRandomPoints(const RationalMap& input_map,
+                                                        const pipeline::MeshStageOptions& o,
+                                                        const std::vector<std::string>& kernels, std::size_t count,
+                                                        std::uint64_t seed) {
+  const RationalMap map = IterationMap(input_map, o.iteration_frame == "reference", o.detail);
+  const JuliaOptions julia = o.TranslatedJuliaOfIterated(map);
+  const double half = map.frame.fractal_radius / 2;
+  const Vec3 c = map.frame.box_center();
+  Vec3 lo{c[0] - half, c[1] - half, c[2] - half}, hi{c[0] + half, c[1] + half, c[2] + half};
+  if (o.box.size() == 6)
+    for (int a = 0; a < 3; ++a) lo[a] = o.box[a], hi[a] = o.box[3 + a];
+  std::mt19937_64 rng(seed);
+  std::vector<Vec3> points(count);
+  for (Vec3& p : points)
+    for (int a = 0; a < 3; ++a) p[a] = lo[a] + (hi[a] - lo[a]) * (double(rng() >> 11) * 0x1p-53);
+  std::vector<std::vector<char>> inside;
+  for (const std::string& k : kernels) {
+    const mesh::BatchField field =
+        mesh::MakeJuliaField(map, julia, o.iso, Precision::kDouble, nullptr, ParseJuliaKernel(k));
+    std::vector<double> v(count);
+    const std::int64_t chunk = 4096, chunks = (std::int64_t(count) + chunk - 1) / chunk;
+#pragma omp parallel for schedule(dynamic)
+    for (std::int64_t b = 0; b < chunks; ++b) {
+      const std::size_t i0 = std::size_t(b * chunk), n = std::min<std::size_t>(std::size_t(chunk), count - i0);
+      field.evaluate(points.data() + i0, n, v.data() + i0);
+    }
+    std::vector<char> in(count);
+    for (std::size_t i = 0; i < count; ++i) in[i] = v[i] < o.iso;
+    inside.push_back(std::move(in));
+  }
+  return inside;
+}
+
 // bench mesh: each resolution and kernel in a child process, so that its peak RSS is its own (wait4).
 void AddBenchMesh(CLI::App* bench) {
   struct Args {
     std::string map, resolutions = "256,512", kernels = "scalar,vector", out;
-    int iterations = JuliaOptions{}.iterations;
+    pipeline::MeshStageOptions o;  // the mesh stage's settings (resolution and kernel: per case)
+    int compare_points = 0;
   };
   auto a = std::make_shared<Args>();
   CLI::App* c = bench->add_subcommand(
@@ -271,8 +310,18 @@ void AddBenchMesh(CLI::App* bench) {
   c->add_option("map", a->map, "map.json")->required();
   c->add_option("--resolutions", a->resolutions, "Comma-separated resolutions")->capture_default_str();
   c->add_option("--kernel", a->kernels, "Comma-separated iteration kernels: scalar, vector")->capture_default_str();
-  c->add_option("-n,--iterations", a->iterations, "Map applications n")->capture_default_str();
   c->add_option("--markdown", a->out, "Append the Markdown table to this file");
+  // The mesh stage's settings that change the set or its cost (intricate sets: --detail,
+  // --translate-potential, --iteration-frame), as `quijibo mesh` and `quijibo run` take them.
+  BindSettings(c, a->o,
+               {"iterations", "escape", "capture", "iso", "translate", "translate_potential", "iteration_frame",
+                "detail"});
+  AddMesherOptions(c, a->o.meshing);
+  c->add_option("--compare-points", a->compare_points,
+                "Also the volume IoU of each kernel's set {log|q_n| < iso} against the first kernel's, at this "
+                "many seeded random points of the box (0: off)")
+      ->check(CLI::Range(0, 100000000))
+      ->capture_default_str();
   c->callback([a] {
     const RationalMap map = ReadMap(a->map);
     std::vector<int> res;
@@ -291,22 +340,23 @@ void AddBenchMesh(CLI::App* bench) {
     const std::string isa = JuliaBatch(map, JuliaOptions{}).isa();
     // Throughput: field evaluations (nodes and bisection) per wall second, and factor evaluations
     // (one root's log, atan2, sin, cos and product) per wall second = map applications x roots.
-    std::string md = "| resolution | n | kernel | seconds | peak RSS (MB) | vertices | triangles | node evals | "
+    std::string md = "| resolution | n | kernel | seconds | CPU s | peak RSS (MB) | vertices | triangles | node evals | "
                      "bisection evals | evals/s | root x iteration evals/s (M) | tiles meshed/total |\n"
-                     "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+                     "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     json all = json::array();
     for (int r : res) {
       std::map<std::string, double> rate;
       for (const std::string& kernel : kernels) {
         const ChildResult child = ChildProcess([&]() -> std::string {
           try {
-            pipeline::MeshStageOptions o;
+            pipeline::MeshStageOptions o = a->o;
             o.meshing.resolution = r;
-            o.julia.iterations = a->iterations;
             o.kernel = kernel;
             const pipeline::MeshStageResult m = pipeline::MeshJulia(map, o);
             const mesh::MeshingSummary& s = m.summary;
+            const Vec4& t = m.julia.root_translation;
             return json({{"seconds", s.seconds}, {"vertices", s.vertices}, {"triangles", s.triangles},
+                         {"root_translation", {t[0], t[1], t[2], t[3]}},
                          {"nodes", s.nodes_evaluated}, {"bisection", s.bisection_evaluations},
                          {"search", s.search_evaluations}, {"following", s.follow_evaluations},
                          {"escaped", m.escaped}, {"non_finite", m.non_finite},
@@ -333,8 +383,9 @@ void AddBenchMesh(CLI::App* bench) {
         rate[kernel] = j["factor_evaluations_per_second"].get<double>();
         all.push_back(j);
         char row[512];
-        std::snprintf(row, sizeof row, "| %d^3 | %d | %s | %.1f | %.0f | %lld | %lld | %lld | %lld | %.0f | %.1f | %lld/%lld |\n",
-                      r, a->iterations, kernel.c_str(), seconds, j["peak_rss_mb"].get<double>(),
+        std::snprintf(row, sizeof row,
+                      "| %d^3 | %d | %s | %.1f | %.1f | %.0f | %lld | %lld | %lld | %lld | %.0f | %.1f | %lld/%lld |\n",
+                      r, a->o.julia.iterations, kernel.c_str(), seconds, child.cpu_seconds, j["peak_rss_mb"].get<double>(),
                       (long long)j["vertices"].get<std::int64_t>(), (long long)j["triangles"].get<std::int64_t>(),
                       (long long)j["nodes"].get<std::int64_t>(), (long long)j["bisection"].get<std::int64_t>(),
                       evals / seconds, rate[kernel] / 1e6, (long long)j["tiles_meshed"].get<std::int64_t>(),
@@ -344,15 +395,36 @@ void AddBenchMesh(CLI::App* bench) {
       }
       if (rate.count("scalar") && rate.count("vector") && rate["scalar"] > 0) {
         char line[128];
-        std::snprintf(line, sizeof line, "| %d^3 | | vector / scalar | | | | | | | | %.2fx | |\n", r,
+        std::snprintf(line, sizeof line, "| %d^3 | | vector / scalar | | | | | | | | | %.2fx | |\n", r,
                       rate["vector"] / rate["scalar"]);
         md += line;
         std::fprintf(stderr, "%s", line);
       }
     }
-    const json doc = {{"benchmark", "mesh"}, {"date", date}, {"map", a->map},
+    json agreement = json::array();
+    if (a->compare_points > 0 && kernels.size() > 1) {
+      const std::vector<std::vector<char>> inside = KernelSetsAtRandomPoints(
+          map, a->o, kernels, std::size_t(a->compare_points), /*seed=*/1);
+      for (std::size_t k = 1; k < kernels.size(); ++k) {
+        std::int64_t both = 0, either = 0, differ = 0;
+        for (std::size_t i = 0; i < inside[0].size(); ++i) {
+          both += inside[0][i] && inside[k][i];
+          either += inside[0][i] || inside[k][i];
+          differ += inside[0][i] != inside[k][i];
+        }
+        const double iou = either ? double(both) / double(either) : 1.0;
+        agreement.push_back({{"kernel", kernels[k]}, {"against", kernels[0]}, {"points", a->compare_points},
+                             {"inside", either}, {"differing", differ}, {"volume_iou", iou}});
+        char line[256];
+        std::snprintf(line, sizeof line, "\nVolume IoU of %s's set against %s's: %.6f (%lld of %d random points differ)\n",
+                      kernels[k].c_str(), kernels[0].c_str(), iou, (long long)differ, a->compare_points);
+        md += line;
+        std::fprintf(stderr, "%s", line);
+      }
+    }
+    const json doc = {{"benchmark", "mesh"}, {"date", date}, {"map", a->map}, {"mesh_settings", a->o.ToJson()},
                       {"cores", int(::sysconf(_SC_NPROCESSORS_ONLN))}, {"load_average_at_start", load[0]},
-                      {"vector_isa", isa}, {"results", all}};
+                      {"vector_isa", isa}, {"results", all}, {"set_agreement", agreement}};
     if (!a->out.empty()) {
       std::string old;
       if (std::filesystem::exists(a->out)) old = ReadFile(a->out);

@@ -8,6 +8,9 @@ void AddMesherOptions(CLI::App* c, mesh::MeshingOptions& o) {
   c->add_flag("--dense", [&o](std::int64_t) { o.sparse = false; }, "Evaluate every node (no sparse block search)");
   c->add_option("--tile", o.tile_cells, "Cells per tile side")->capture_default_str();
   c->add_option("--bisection-steps", o.bisection_steps, "Bisection steps per edge")->capture_default_str();
+  c->add_flag("--bisection-interpolate", o.bisection_interpolate,
+              "After the bisection steps, interpolate linearly in the last bracket (fewer steps, nearly the same "
+              "vertices; 0 steps: plain marching cubes)");
   c->add_option("--margin", o.coarse_margin_cells, "Safety margin of the sparse search, cells")->capture_default_str();
   c->add_option("--search-stride", o.search_stride, "Coarsest lattice of the sparse search, cells")
       ->capture_default_str();

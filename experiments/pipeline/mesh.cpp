@@ -107,11 +107,11 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
               [](auto& o) -> std::string& { return o.precision; }, kPrecisionNames)
           .Choice(
               "kernel", "--kernel",
-              "Iteration kernel in double precision: vector (SIMD, glibc libmvec) or scalar (the reference); other "
-              "precisions are scalar",
+              "Iteration kernel in double precision: vector (SIMD, glibc libmvec), fused (SIMD, quijibo's own "
+              "log, atan2 and sincos) or scalar (the reference); other precisions are scalar",
               [](auto& o) -> std::string& { return o.kernel; }, kJuliaKernelNames)
-          .Doc("iteration kernel in double: SIMD (`quijibo/julia_batch.h`) or the scalar reference; same meshes "
-               "([meshing.md](meshing.md))")
+          .Doc("iteration kernel in double: SIMD with libmvec (`vector`) or with quijibo's own functions "
+               "(`fused`, `quijibo/vector_math.h`), or the scalar reference ([meshing.md](meshing.md))")
           .String("optimizer", "", "Which optimizer's map to mesh",
                   [](auto& o) -> std::string& { return o.optimizer; })
           .Doc("which optimized map to mesh (unset: the first optimizer's)");

@@ -169,5 +169,34 @@ TEST_F(JuliaCli, KernelsGiveTheSameMeshAndBenchReportsBoth) {
   EXPECT_TRUE(Exists("bench.md"));
 }
 
+// `bench mesh` takes the mesh stage's settings (an intricate set: detail, translation, frame) and
+// compares the kernels' sets by volume IoU at random points.
+TEST_F(JuliaCli, BenchMeshTakesTheMeshStageSettings) {
+  const std::string common = "bench mesh " + Path("map.json") + " --resolutions 16 -n 3 --kernel vector,fused ";
+  const CommandResult plain = RunQuijibo(common);
+  ASSERT_EQ(plain.code, 0) << plain.out;
+  const CommandResult r = RunQuijibo(common + "--detail 2 --translate 0,0,0.1 --iteration-frame reference "
+                                              "--bisection-steps 3 --bisection-interpolate --compare-points 3000");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto p = nlohmann::json::parse(plain.out.substr(plain.out.find("{\n")));
+  const auto j = nlohmann::json::parse(r.out.substr(r.out.find("{\n")));
+  ASSERT_EQ(j["results"].size(), 2u);
+  EXPECT_EQ(j["results"][1]["kernel"], "fused");
+  EXPECT_EQ(j["mesh_settings"]["detail"].get<double>(), 2.0);
+  EXPECT_EQ(j["mesh_settings"]["iteration_frame"], "reference");
+  EXPECT_EQ(j["results"][0]["root_translation"][2].get<double>(), 0.1);
+  // The settings reach the mesher: another set, fewer bisection evaluations per crossing edge.
+  EXPECT_NE(j["results"][0]["applications"], p["results"][0]["applications"]);
+  EXPECT_LT(j["results"][0]["bisection"].get<double>() / j["results"][0]["vertices"].get<double>(),
+            p["results"][0]["bisection"].get<double>() / p["results"][0]["vertices"].get<double>());
+  ASSERT_EQ(j["set_agreement"].size(), 1u);
+  const auto& a = j["set_agreement"][0];
+  EXPECT_EQ(a["kernel"], "fused");
+  EXPECT_EQ(a["points"].get<int>(), 3000);
+  EXPECT_GT(a["inside"].get<int>(), 0);
+  EXPECT_GE(a["volume_iou"].get<double>(), 0.99);
+  EXPECT_NE(RunQuijibo(common + "--compare-points -1").code, 0);
+}
+
 }  // namespace
 }  // namespace quijibo

@@ -70,15 +70,16 @@ std::vector<BatchCase> BatchCases() {
   };
 }
 
-class JuliaBatchMatchesScalar : public ::testing::TestWithParam<std::tuple<int, bool>> {};
+// Parameters: the case, AVX2 allowed, the fused kernel (vector_math.h) instead of libmvec.
+class JuliaBatchMatchesScalar : public ::testing::TestWithParam<std::tuple<int, bool, bool>> {};
 
 TEST_P(JuliaBatchMatchesScalar, ValuesVersorsIterationsAndEscape) {
-  const auto [index, avx2] = GetParam();
+  const auto [index, avx2, fused] = GetParam();
   const BatchCase c = BatchCases()[std::size_t(index)];
   SCOPED_TRACE(c.name);
   const RationalMap map = BatchTestMap(7 + std::uint64_t(index), c.top, c.bottom, c.zero_roots);
   const JuliaMap<double> scalar(map, c.options);
-  const JuliaBatch batch(map, c.options, avx2);
+  const JuliaBatch batch(map, c.options, avx2, fused);
   std::vector<Vec3> p = BatchPoints(c.top > 100 ? 600 : 3000, 11 + std::uint64_t(index));
   p.push_back({0, 0, 0});  // the zero roots' own point
   std::vector<JuliaResult<double>> v(p.size());
@@ -104,8 +105,8 @@ TEST_P(JuliaBatchMatchesScalar, ValuesVersorsIterationsAndEscape) {
     }
   }
   RecordProperty("max_relative_difference", std::to_string(worst));
-  std::printf("%s %s: max |L_vector - L_scalar| / max(1, |L|) = %.3g over %d finite values, %d escaped\n", c.name,
-              batch.isa(), worst, finite, escaped);
+  std::printf("%s %s%s: max |L_vector - L_scalar| / max(1, |L|) = %.3g over %d finite values, %d escaped\n", c.name,
+              batch.isa(), fused ? " fused" : "", worst, finite, escaped);
   EXPECT_GT(finite, int(p.size()) / 2);
   if (c.options.iterations > 1) {
     EXPECT_GT(escaped, 0);
@@ -113,7 +114,8 @@ TEST_P(JuliaBatchMatchesScalar, ValuesVersorsIterationsAndEscape) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, JuliaBatchMatchesScalar,
-                         ::testing::Combine(::testing::Range(0, int(BatchCases().size())), ::testing::Bool()));
+                         ::testing::Combine(::testing::Range(0, int(BatchCases().size())), ::testing::Bool(),
+                                            ::testing::Bool()));
 
 // Samples on a root and NaN samples: non-finite exactly where the scalar kernel is, and NaN stays
 // NaN (counted by the field, not hidden).
@@ -122,7 +124,9 @@ TEST(JuliaBatch, NonFiniteLikeTheScalarKernel) {
   JuliaOptions o;
   o.iterations = 1;
   const JuliaMap<double> scalar(map, o);
-  const JuliaBatch batch(map, o);
+  for (bool fused : {false, true}) {
+  SCOPED_TRACE(fused ? "fused" : "vector");
+  const JuliaBatch batch(map, o, true, fused);
   std::vector<Quaternion<double>> q0;
   for (const auto& f : scalar.Factors()) q0.push_back(f.root);  // log|q - r| = -inf
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -145,6 +149,7 @@ TEST(JuliaBatch, NonFiniteLikeTheScalarKernel) {
   EXPECT_TRUE(std::isnan(v[q0.size() - 2].log_modulus));
   EXPECT_EQ(v[q0.size() - 2].iterations, 0);
   EXPECT_TRUE(std::isfinite(v.back().log_modulus));
+  }
 }
 
 // A node's value does not depend on the batch it comes in, nor on its place there (partial chunks
@@ -153,7 +158,9 @@ TEST(JuliaBatch, ValueIndependentOfTheBatch) {
   const RationalMap map = BatchTestMap(9, 12, 9, true);
   JuliaOptions o;
   o.iterations = 4;
-  const JuliaBatch batch(map, o);
+  for (bool fused : {false, true}) {
+  SCOPED_TRACE(fused ? "fused" : "vector");
+  const JuliaBatch batch(map, o, true, fused);
   const std::vector<Vec3> p = BatchPoints(203, 21);
   std::vector<JuliaResult<double>> all(p.size());
   batch.At(p.data(), p.size(), all.data());
@@ -173,11 +180,14 @@ TEST(JuliaBatch, ValueIndependentOfTheBatch) {
     batch.At(&p[i], 1, &one);
     EXPECT_EQ(std::bit_cast<std::uint64_t>(one.log_modulus), std::bit_cast<std::uint64_t>(all[i].log_modulus)) << i;
   }
+  }
 }
 
 TEST(JuliaBatch, KernelNames) {
   EXPECT_EQ(ParseJuliaKernel("vector"), JuliaKernel::kVector);
   EXPECT_EQ(ParseJuliaKernel("scalar"), JuliaKernel::kScalar);
+  EXPECT_EQ(ParseJuliaKernel("fused"), JuliaKernel::kFused);
+  EXPECT_STREQ(JuliaKernelName(JuliaKernel::kFused), "fused");
   EXPECT_STREQ(JuliaKernelName(JuliaKernel::kVector), "vector");
   EXPECT_THROW(ParseJuliaKernel("simd"), Error);
   EXPECT_THROW(JuliaBatch(BatchTestMap(1, 3, 2, false), BatchOptions(0, [](JuliaOptions&) {})), Error);

@@ -1,4 +1,4 @@
-// Meshes from the vectorized Julia kernel are the scalar kernel's meshes, bit for bit, on the test
+// Meshes from the vectorized Julia kernels (vector and fused) are the scalar kernel's meshes, bit for bit, on the test
 // maps (n = 1 to 4, zero roots, root translation, rotation), and do not depend on the thread count.
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -43,6 +43,10 @@ TEST_P(JuliaKernelMesh, VectorAndScalarKernelsGiveTheSameMesh) {
   if (iterations > 1) {
     EXPECT_GT(vs.escaped.load(), 0);
   }
+  // The fused kernel (vector_math.h): values within its bounds of the others', and so far the same mesh.
+  const TriangleMesh mf = MeshField(MakeJuliaField(map, j, 0.0, Precision::kDouble, nullptr, JuliaKernel::kFused), o);
+  EXPECT_EQ(mf.triangles, mc.triangles);
+  EXPECT_EQ(mf.vertices, mc.vertices);
 
   // One thread: the same mesh (a node's value does not depend on its batch).
   const int threads = omp_get_max_threads();

@@ -86,6 +86,37 @@ TEST(MarchingCubes, MoreBisectionStepsAreMoreAccurate) {
   for (const Vec3& v : m.vertices) EXPECT_NEAR(Norm(v), 1.0, s.spacing * 2e-6);
 }
 
+// --bisection-interpolate: the same triangles as plain bisection (connectivity depends only on the
+// node signs), every vertex on its edge, and on a sphere 3 steps + interpolation are closer to the
+// surface than 6 plain steps; 0 steps is plain marching cubes interpolation.
+TEST(MarchingCubes, BisectionInterpolationMovesOnlyVertices) {
+  MeshingOptions o;
+  o.resolution = 24;
+  const BatchField sphere = Sphere(1.0, {0.02, -0.01, 0.03});
+  MeshingSummary s6, s3;
+  const TriangleMesh plain = MeshField(sphere, o, &s6);
+  o.bisection_steps = 3;
+  o.bisection_interpolate = true;
+  const TriangleMesh interp = MeshField(sphere, o, &s3);
+  ASSERT_EQ(plain.triangles, interp.triangles);
+  ASSERT_EQ(plain.vertices.size(), interp.vertices.size());
+  EXPECT_LT(s3.bisection_evaluations, s6.bisection_evaluations);
+  const Vec3 c{0.02, -0.01, 0.03};
+  double worst_plain = 0, worst_interp = 0, moved = 0;
+  for (std::size_t v = 0; v < plain.vertices.size(); ++v) {
+    const Vec3 &a = plain.vertices[v], &b = interp.vertices[v];
+    worst_plain = std::max(worst_plain, std::abs(Norm({a[0] - c[0], a[1] - c[1], a[2] - c[2]}) - 1.0));
+    worst_interp = std::max(worst_interp, std::abs(Norm({b[0] - c[0], b[1] - c[1], b[2] - c[2]}) - 1.0));
+    moved = std::max(moved, Norm({a[0] - b[0], a[1] - b[1], a[2] - b[2]}));
+  }
+  EXPECT_LT(worst_interp, worst_plain);
+  EXPECT_LE(moved, s6.spacing / 8 + 1e-12);  // both within their last bracket of h / 8
+  o.bisection_steps = 0;
+  EXPECT_EQ(MeshField(sphere, o).triangles, plain.triangles);
+  o.bisection_interpolate = false;
+  EXPECT_THROW(MeshField(sphere, o), Error);  // 0 steps only with interpolation
+}
+
 TEST(MarchingCubes, GyroidIsClosedAndManifold) {
   MeshingOptions o;
   o.resolution = 64;
