@@ -153,6 +153,18 @@ void AddMonopoleSettings(Schema<O>& s) {
                [](auto& o) -> bool& { return o.guess.leading_zero_roots; })
       .Doc("monopoles: the reference's leading zero roots (`--no-zero-roots` leaves them out)")
       .When(Kind({"monopoles"}))
+      .Enum(
+          "scan", "--start-scan",
+          "monopoles: iou (the level of the monopoles' field with the best one-step IoU, made as steep as the "
+          "log-kernel start: not saturated; amplitude unused) or reference (the reference's ln C scan at amplitude)",
+          monopole::kStartScanNames, [](const O& o) { return monopole::StartScanName(o.guess.scan); },
+          [](O& o, const std::string& v) { o.guess.scan = monopole::ParseStartScan(v); })
+      .Doc("monopoles: how the start's ln C and steepness are chosen: `iou`, the level set of the monopoles' field "
+           "with the best one-step IoU on the target grid, its exponents scaled so that |alpha L| is 1 at the "
+           "median cell within two cells of the surface (a start that is not saturated has a gradient; `amplitude` "
+           "is not used); `reference`, the reference code's 1-D scan of ln C at `amplitude` "
+           "([fidelity.md](fidelity.md) §12)")
+      .When(Kind({"monopoles"}))
       .Integer(
           "scan_resolution", "--scan-resolution", "monopoles: grid of the ln C scan",
           [](auto& o) -> int& { return o.guess.scan_resolution; }, monopole::InitialGuessOptions::kScanResolutionRange)
@@ -348,6 +360,8 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
                     {"seed", mo.fit.seed},
                     {"sampling_seed", mo.sampling.seed},
                     {"amplitude", o.guess.amplitude},
+                    {"scan", monopole::StartScanName(o.guess.scan)},
+                    {"steepness", scan.steepness},
                     {"relative_residual", mono.fit.final_relative_residual},
                     {"monopoles", mono.monopoles.size()}};
   return map;

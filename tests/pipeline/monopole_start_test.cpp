@@ -74,6 +74,14 @@ TEST(MonopoleStart, TheSphereGetsAConvergedUprightStart) {
   EXPECT_EQ(r.summary.at("fit_stop").get<std::string>(), "converged");
   EXPECT_FALSE(r.summary.at("start").at("inverted").get<bool>());
   EXPECT_GT(r.summary.at("start").at("iou").get<double>(), 0.25);  // no low-overlap warning
+  // The IoU scan (the default) starts unsaturated, with the best one-step IoU of the monopoles'
+  // sets: at least the reference scan's, whose amplitude saturates the start.
+  EXPECT_LT(r.summary.at("start").at("saturated_fraction").get<double>(), 0.1);
+  o.guess.scan = monopole::StartScan::kReference;
+  const InitialGuessResult ref = InitialGuess(target, o);
+  EXPECT_GE(r.summary.at("start").at("iou").get<double>(), ref.summary.at("start").at("iou").get<double>() - 1e-3);
+  EXPECT_GT(ref.summary.at("start").at("saturated_fraction").get<double>(),
+            r.summary.at("start").at("saturated_fraction").get<double>());
 }
 
 }  // namespace
