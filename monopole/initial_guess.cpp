@@ -155,19 +155,27 @@ RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFram
     if (scan) *scan = s;
     return m;
   }
-  // The zero roots' exponents stay 1 (they cancel while tau = beta); the monopoles' take the steepness.
+  // The reference's zero roots cancel only while tau = beta; the V and F passes move tau, beta and
+  // their exponents apart, and as a pole the origin throws every orbit out (the n-step set of the
+  // paper's bunny schedule was empty: docs/fidelity.md §12). So, as the log-kernel start does, the
+  // origin is one top root, its exponent the smallest monopole's, part of the field the scan reads.
   RationalMap f = m;
-  const std::size_t z = o.leading_zero_roots ? 1 : 0;
-  if (z) {
+  if (o.leading_zero_roots) {
     f.leading_zero_roots = false;
     f.top_roots.erase(f.top_roots.begin());
     f.top_exponents.erase(f.top_exponents.begin());
     f.bottom_roots.erase(f.bottom_roots.begin());
     f.bottom_exponents.erase(f.bottom_exponents.begin());
+    double smallest = std::numeric_limits<double>::infinity();
+    for (double e : f.top_exponents) smallest = std::min(smallest, e);
+    for (double e : f.bottom_exponents) smallest = std::min(smallest, e);
+    f.top_roots.insert(f.top_roots.begin(), Vec4{0, 0, 0, 0});
+    f.top_exponents.insert(f.top_exponents.begin(), std::isfinite(smallest) ? smallest : 1.0);
   }
   const LnCScan s = ScanLevelByIou(f, sdf, o.alpha);
-  for (std::size_t i = z; i < m.top_exponents.size(); ++i) m.top_exponents[i] *= s.steepness;
-  for (std::size_t i = z; i < m.bottom_exponents.size(); ++i) m.bottom_exponents[i] *= s.steepness;
+  m = f;
+  for (double& e : m.top_exponents) e *= s.steepness;
+  for (double& e : m.bottom_exponents) e *= s.steepness;
   m.ln_C = s.ln_C;
   if (scan) *scan = s;
   return m;

@@ -5,7 +5,10 @@
 //     the normalized frame's units (divided by the fractal radius), as the reference fits there;
 //   - optionally the reference's leading zero roots: a root at the origin with exponent 1 first in
 //     top and in bottom (not amplified);
-//   - tau = beta = 1, and ln C from the reference's one-dimensional scan: with C = 1, F = log|R|
+//   - tau = beta = 1, and ln C and the steepness from `scan`: by default (StartScan::kIou) the level
+//     set of F with the best one-step IoU, the exponents scaled so the start is not saturated, and the
+//     zero roots replaced by one top root at the origin (below); or the reference's one-dimensional
+//     scan (StartScan::kReference): with C = 1, F = log|R|
 //     on the scan grid (singular values replaced by the mean), minimize
 //     sum -tanh(alpha (F - t)) Wu over t (100 samples over [min F, max F], then three refinements of
 //     +-5 steps at a tenth of the step); ln C = -t*. Wu is the un-normalized layer weight

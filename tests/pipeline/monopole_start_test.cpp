@@ -36,13 +36,13 @@ TEST(MonopoleStart, AnInvertedStartIsRefusedWithTheResidualAndWhatToDo) {
 }
 
 // The tooth's 1 - P start on the unit box (issue 29): upright by the medians, but the optimizer
-// collapsed from it to an empty set.
-TEST(MonopoleStart, AStartThatBarelyOverlapsTheShapeIsWarnedOf) {
+// collapsed from it to an empty set. Refused, saying why and what to do.
+TEST(MonopoleStart, AStartThatBarelyOverlapsTheShapeIsRefused) {
   const monopole::StartCheck start{.median_inside = -0.36, .median_outside = -0.22, .iou = 0.108};
   const MonopoleStartVerdict v = Judge(0.041, monopole::FitStop::kCandidatesExhausted, start);
-  EXPECT_TRUE(v.refusal.empty());
-  for (const char* part : {"0.041", "--candidates", "IoU 0.108", "empty set", "potential"})
-    EXPECT_NE(v.warning.find(part), std::string::npos) << part << " in: " << v.warning;
+  EXPECT_FALSE(v.refusal.empty());
+  for (const char* part : {"0.041", "IoU 0.108", "empty the set", "--epsilon", "potential", "log-kernel"})
+    EXPECT_NE(v.refusal.find(part), std::string::npos) << part << " in: " << v.refusal;
 }
 
 TEST(MonopoleStart, AnUprightConvergedStartPassesAndAnUnconvergedOneIsWarnedOf) {
