@@ -210,10 +210,16 @@ TEST(EnergyTest, NoWeightModeRewardsATrivialSet) {
       EXPECT_GE(psi_empty, -1e-12) << shape << " " << WeightFieldName(w);
       EXPECT_GE(psi_full, -1e-12) << shape << " " << WeightFieldName(w);
       EXPECT_NEAR(std::min(psi_empty, psi_full), 0.0, 1e-12) << shape << " " << WeightFieldName(w);
-      // A perfect fit scores below both.
+      // A perfect fit scores below both: -1 + |sum W| / eta = -2 (sum of the smaller side's |W|) / eta.
       std::vector<double> perfect(empty.size());
-      for (std::size_t c = 0; c < perfect.size(); ++c) perfect[c] = sdf.values[c] < 0 ? -5.0 : 5.0;
-      EXPECT_LT(EnergyOfField(grid, perfect, 10.0), -0.5) << shape << " " << WeightFieldName(w);
+      double in = 0, out = 0;
+      for (std::size_t c = 0; c < perfect.size(); ++c) {
+        perfect[c] = sdf.values[c] < 0 ? -5.0 : 5.0;
+        (sdf.values[c] < 0 ? in : out) += std::abs(grid.weight[c]);
+      }
+      EXPECT_NEAR(EnergyOfField(grid, perfect, 10.0), -2 * std::min(in, out) / grid.eta, 1e-9)
+          << shape << " " << WeightFieldName(w);
+      EXPECT_LT(EnergyOfField(grid, perfect, 10.0), -0.2) << shape << " " << WeightFieldName(w);
       if (w == WeightField::kBalanced) {
         EXPECT_LT(TrivialSetEnergy({&grid}), -0.1) << shape;  // the raw sum rewards the empty set
       } else {
