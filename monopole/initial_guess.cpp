@@ -5,9 +5,18 @@
 #include <limits>
 
 #include "util/error.h"
+#include "quijibo/iou.h"
 #include "quijibo/target.h"
 
 namespace quijibo::monopole {
+
+StartScan ParseStartScan(const std::string& name) {
+  if (name == "iou") return StartScan::kIou;
+  if (name == "reference") return StartScan::kReference;
+  throw Error("unknown start scan \"" + name + "\" (expected iou or reference)");
+}
+
+std::string StartScanName(StartScan s) { return s == StartScan::kIou ? "iou" : "reference"; }
 
 std::string InitialGuessOptions::Validate() const {
   if (!(amplitude > 0) || !std::isfinite(amplitude)) return "amplitude must be a positive number";
@@ -70,6 +79,52 @@ LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, d
   return out;
 }
 
+LnCScan ScanLevelByIou(const RationalMap& map, const ScalarGrid& sdf, double alpha) {
+  const std::int64_t n = sdf.frame.cell_count();
+  std::vector<double> F(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < n; ++c) F[std::size_t(c)] = OneStepLogModulus(map, sdf.frame.cell_center(c));
+  LnCScan out;
+  // Cells on a top root (F = -inf) are in every set; NaN cells (a top and a bottom root) in none.
+  std::vector<std::int64_t> order;
+  order.reserve(std::size_t(n));
+  std::int64_t inside = 0;
+  for (std::int64_t c = 0; c < n; ++c) {
+    inside += sdf.values[std::size_t(c)] < 0;
+    if (std::isnan(F[std::size_t(c)])) ++out.singular_cells;
+    else order.push_back(c);
+  }
+  if (order.empty()) throw Error("start scan: the map is singular everywhere on the target grid");
+  std::sort(order.begin(), order.end(), [&](std::int64_t a, std::int64_t b) { return F[std::size_t(a)] < F[std::size_t(b)]; });
+  // The set {F < t} for t just above the k-th smallest F: its first k + 1 cells.
+  std::int64_t both = 0, best_k = -1;
+  double best_iou = -1;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    both += sdf.values[std::size_t(order[k])] < 0;
+    if (k + 1 < order.size() && F[std::size_t(order[k + 1])] == F[std::size_t(order[k])]) continue;
+    const double iou = IntersectionOverUnion(both, inside + std::int64_t(k + 1) - both);
+    if (iou > best_iou) best_iou = iou, best_k = std::int64_t(k);
+  }
+  const double lo = F[std::size_t(order[std::size_t(best_k)])];
+  const double hi = std::size_t(best_k + 1) < order.size() ? F[std::size_t(order[std::size_t(best_k + 1)])] : lo + 1.0;
+  const double t = std::isfinite(lo) ? 0.5 * (lo + hi) : hi - 1.0;
+  // The steepness: |alpha L| = 1 at the band's median (the band: within two cells of the surface).
+  std::vector<double> band;
+  const double h = sdf.frame.spacing;
+  for (std::size_t c = 0; c < F.size(); ++c)
+    if (std::abs(sdf.values[c]) <= 2 * h && std::isfinite(F[c])) band.push_back(std::abs(F[c] - t));
+  double scale = 1;
+  if (!band.empty()) {
+    std::nth_element(band.begin(), band.begin() + std::ptrdiff_t(band.size() / 2), band.end());
+    const double m = band[band.size() / 2];
+    if (m > 0 && std::isfinite(m)) scale = 1.0 / (alpha * m);
+  }
+  out.iou = best_iou;
+  out.steepness = scale;
+  out.ln_C = -scale * t;
+  return out;
+}
+
 RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFrame& frame, const ScalarGrid& sdf,
                        const InitialGuessOptions& o, LnCScan* scan) {
   if (auto why = o.Validate(); !why.empty()) throw Error("initial guess: " + why);
@@ -94,7 +149,33 @@ RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFram
       m.bottom_exponents.push_back(-w);
     }
   }
-  const LnCScan s = ScanLnC(m, sdf, o.scan_resolution, o.alpha);
+  if (o.scan == StartScan::kReference) {
+    const LnCScan s = ScanLnC(m, sdf, o.scan_resolution, o.alpha);
+    m.ln_C = s.ln_C;
+    if (scan) *scan = s;
+    return m;
+  }
+  // The reference's zero roots cancel only while tau = beta; the V and F passes move tau, beta and
+  // their exponents apart, and as a pole the origin throws every orbit out (the n-step set of the
+  // paper's bunny schedule was empty: docs/fidelity.md §12). So, as the log-kernel start does, the
+  // origin is one top root, its exponent the smallest monopole's, part of the field the scan reads.
+  RationalMap f = m;
+  if (o.leading_zero_roots) {
+    f.leading_zero_roots = false;
+    f.top_roots.erase(f.top_roots.begin());
+    f.top_exponents.erase(f.top_exponents.begin());
+    f.bottom_roots.erase(f.bottom_roots.begin());
+    f.bottom_exponents.erase(f.bottom_exponents.begin());
+    double smallest = std::numeric_limits<double>::infinity();
+    for (double e : f.top_exponents) smallest = std::min(smallest, e);
+    for (double e : f.bottom_exponents) smallest = std::min(smallest, e);
+    f.top_roots.insert(f.top_roots.begin(), Vec4{0, 0, 0, 0});
+    f.top_exponents.insert(f.top_exponents.begin(), std::isfinite(smallest) ? smallest : 1.0);
+  }
+  const LnCScan s = ScanLevelByIou(f, sdf, o.alpha);
+  m = f;
+  for (double& e : m.top_exponents) e *= s.steepness;
+  for (double& e : m.bottom_exponents) e *= s.steepness;
   m.ln_C = s.ln_C;
   if (scan) *scan = s;
   return m;

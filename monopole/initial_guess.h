@@ -5,13 +5,17 @@
 //     the normalized frame's units (divided by the fractal radius), as the reference fits there;
 //   - optionally the reference's leading zero roots: a root at the origin with exponent 1 first in
 //     top and in bottom (not amplified);
-//   - tau = beta = 1, and ln C from the reference's one-dimensional scan: with C = 1, F = log|R|
+//   - tau = beta = 1, and ln C and the steepness from `scan`: by default (StartScan::kIou) the level
+//     set of F with the best one-step IoU, the exponents scaled so the start is not saturated, and the
+//     zero roots replaced by one top root at the origin (below); or the reference's one-dimensional
+//     scan (StartScan::kReference): with C = 1, F = log|R|
 //     on the scan grid (singular values replaced by the mean), minimize
 //     sum -tanh(alpha (F - t)) Wu over t (100 samples over [min F, max F], then three refinements of
 //     +-5 steps at a tenth of the step); ln C = -t*. Wu is the un-normalized layer weight
 //     (-1/k inside, 0.25/k outside).
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "monopole/monopole_fit.h"
@@ -19,6 +23,20 @@
 #include "util/settings.h"
 
 namespace quijibo::monopole {
+
+// How the start's level and steepness are chosen from the monopoles' field F = sum w_i log|q - m_i|.
+enum class StartScan {
+  // The set {F < t} with the highest one-step IoU against the target's inside on the target grid,
+  // made as steep as the log-kernel start: the median |alpha L| over the cells within two cells
+  // of the surface is 1 (tanh 0.76), so the start has a gradient on the surface (docs/fidelity.md §12).
+  // `amplitude` is not used: the steepness replaces it.
+  kIou,
+  // The reference's 1-D scan of ln C at the given amplitude (the header's comment).
+  kReference,
+};
+inline const std::vector<std::string> kStartScanNames = {"iou", "reference"};
+StartScan ParseStartScan(const std::string& name);  // iou|reference
+std::string StartScanName(StartScan s);
 
 struct InitialGuessOptions {
   // The "initial bulk scalar amplitude". The reference runs 3000 (its cfg comments: 50 "reliable",
@@ -30,14 +48,24 @@ struct InitialGuessOptions {
   int scan_resolution = 25;        // grid of the ln C scan (reference: 25)
   static constexpr ValueRange kScanResolutionRange{4, 512};
   double alpha = 10.0;
+  StartScan scan = StartScan::kIou;
   std::string Validate() const;
 };
 
 struct LnCScan {
   double ln_C = 0;
-  double energy = 0;  // the scan's objective at the optimum (un-normalized weights)
+  double energy = 0;  // the scan's objective at the optimum (un-normalized weights; kReference)
   int singular_cells = 0;
+  // kIou: the best set's one-step IoU on the target grid and the factor the exponents were scaled by.
+  double iou = 0;
+  double steepness = 1;
 };
+
+// kIou's scan: for F of `map` (its exponents, tau = beta = 1, ln C = 0) on the grid of `sdf`, the
+// level t maximizing the IoU of {F < t} with {phi < 0}, and the factor s making the median of
+// alpha s |F - t| over the cells with |phi| <= 2 cells equal to 1. Returns ln C = -s t, the IoU and s
+// (the caller scales the exponents by s).
+LnCScan ScanLevelByIou(const RationalMap& map, const ScalarGrid& sdf, double alpha);
 
 // The initial map. `monopoles` in the fractal frame of `frame`; `sdf` the target on its grid.
 RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFrame& frame,

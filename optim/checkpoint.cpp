@@ -126,6 +126,10 @@ void CheckpointWriter<Scalar>::Write(int li, int pj, int iteration, const Vector
   c["best_x"] = exact(st_.best_x);
   c["best_absolute"] = st_.best_absolute;
   c["best_pass"] = st_.summary.best_pass;
+  c["iou_start"] = st_.summary.iou_start;
+  c["iou_end"] = st_.summary.iou_end;
+  c["lowest_psi_pass"] = st_.summary.lowest_psi_pass;
+  c["lowest_psi"] = st_.summary.lowest_psi;
   json passes = json::array();
   for (const PassSummary& p : st_.summary.passes) passes.push_back(p.ToJson());
   c["passes"] = passes;
@@ -163,6 +167,10 @@ CheckpointPosition ReadCheckpoint(const std::string& path, const Fingerprint& no
   st.best_x = read_vec("best_x");
   st.best_absolute = r.number("/best_absolute");
   st.summary.best_pass = int(r.integer("/best_pass"));
+  st.summary.iou_start = c.value("iou_start", 0.0);
+  st.summary.iou_end = c.value("iou_end", 0.0);
+  st.summary.lowest_psi_pass = c.value("lowest_psi_pass", -1);
+  st.summary.lowest_psi = c.value("lowest_psi", 0.0);
   for (const json& p : c.at("passes")) st.summary.passes.push_back(PassSummary::FromJson(p));
   return at;
 }

@@ -11,6 +11,7 @@ json PassSummary::ToJson() const {
           {"energy_end", energy_end}, {"absolute_end", absolute_end},
           {"overflowed_cells", overflowed_cells}, {"message", message},
           {"line_search_restarts", line_search_restarts}, {"stalled", stalled},
+          {"iou_start", iou_start}, {"iou_end", iou_end}, {"iou_loss", iou_loss}, {"eligible", eligible},
           {"stall_reason", stalled ? StallReason() : std::string()}, {"band", band}};
 }
 
@@ -40,6 +41,10 @@ PassSummary PassSummary::FromJson(const json& j) {
   p.message = j.value("message", "");
   p.line_search_restarts = j.value("line_search_restarts", 0);
   p.stalled = j.value("stalled", p.iterations == 0);
+  p.iou_start = j.value("iou_start", 0.0);
+  p.iou_end = j.value("iou_end", 0.0);
+  p.iou_loss = j.value("iou_loss", false);
+  p.eligible = j.value("eligible", true);
   if (j.contains("band")) p.band = j.at("band");
   return p;
 }

@@ -19,6 +19,12 @@ struct PassSummary {
   std::string message;
   int line_search_restarts = 0;  // line-search failures recovered by resetting the L-BFGS memory
   bool stalled = false;          // no iteration: the pass could not (or did not need to) move
+  // The one-step IoU on the target grid ({L < 0} against {phi < 0}) of the pass's start and end
+  // maps, and whether it fell by more than the optimizer's iou_tolerance (the pass made the set worse).
+  double iou_start = 0, iou_end = 0;
+  bool iou_loss = false;
+  // Whether the map may be kept: its IoU is at least the run's start's (or keep is lowest-psi).
+  bool eligible = true;
   // Narrow band passes: cells evaluated, anchors and the energy error against the dense
   // evaluator at the pass's end (null otherwise).
   nlohmann::json band;

@@ -22,6 +22,14 @@ std::string LevelStartName(OptimizeOptions::LevelStart s) {
   return s == OptimizeOptions::LevelStart::kBest ? "best" : "last";
 }
 
+OptimizeOptions::Keep ParseKeep(const std::string& name) {
+  if (name == "iou") return OptimizeOptions::Keep::kIou;
+  if (name == "lowest-psi") return OptimizeOptions::Keep::kLowestPsi;
+  throw Error("unknown keep \"" + name + "\" (expected iou or lowest-psi)");
+}
+
+std::string KeepName(OptimizeOptions::Keep k) { return k == OptimizeOptions::Keep::kIou ? "iou" : "lowest-psi"; }
+
 LevelWeights ParseLevelWeights(const std::string& name) {
   if (name == "sample") return LevelWeights::kSampleFinest;
   if (name == "recompute") return LevelWeights::kRecompute;
@@ -137,6 +145,21 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
                "them pays for it, and on thick shapes it is what makes the optimized volume at least the start's; "
                "about twice the work; `auto`: only when the 90th percentile of the inside's depth is below 4 "
                "target cells; `off`: the paper's energy, on the nodes ([fidelity.md](fidelity.md) §8, §9, §11)")
+          .Enum(
+              "keep", "--keep",
+              "Which map the run returns: iou (the lowest absolute energy among the maps whose one-step IoU on the "
+              "target grid is at least the start's) or lowest-psi (the lowest absolute energy)",
+              kKeepNames, [](const O& o) { return KeepName(o.keep); },
+              [](O& o, const std::string& v) { o.keep = ParseKeep(v); })
+          .Doc("the map the run returns: `iou`, the lowest absolute energy among the start and the pass ends whose "
+               "one-step IoU on the target grid is at least the start's (the result never fits worse than the start "
+               "by that measure); `lowest-psi`, the lowest absolute energy whatever its IoU ([fidelity.md](fidelity.md) §12)")
+          .Number(
+              "iou_tolerance", "--iou-tolerance",
+              "A pass whose one-step IoU on the target grid falls more than this below its start's is reported",
+              [](auto& o) -> double& { return o.iou_tolerance; }, 0, 1)
+          .Doc("a pass whose one-step IoU on the target grid ends more than this below its start's is flagged in the "
+               "pass table, summary.json (`iou_loss`) and the log")
           .Number(
               "alpha", "--alpha", "Sharpness of tanh", [](auto& o) -> double& { return o.energy.alpha; },
               EnergyOptions::kAlphaRange)

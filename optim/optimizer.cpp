@@ -38,6 +38,8 @@ json OptimizeSummary::ToJson(const OptimizeOptions& o) const {
           {"level_weights", LevelWeightsName(o.level_weights)},
           {"level_start", LevelStartName(o.level_start)}, {"min_level_fidelity", o.min_level_fidelity},
           {"between_nodes", ThinWallSwitchName(o.between_nodes)}, {"between_nodes_on", between_nodes},
+          {"keep", KeepName(o.keep)}, {"iou_tolerance", o.iou_tolerance}, {"iou_start", iou_start},
+          {"iou_end", iou_end}, {"lowest_psi_pass", lowest_psi_pass}, {"lowest_psi", lowest_psi},
           {"levels", levels_json},
           {"alpha", o.energy.alpha}, {"memory", o.memory}, {"complete", complete},
           {"seconds", seconds}, {"absolute_start", absolute_start}, {"absolute_end", absolute_end},
@@ -54,13 +56,30 @@ std::string OptimizeSummary::BestPassName() const {
 std::string OptimizeSummary::Report() const {
   std::ostringstream s;
   char line[256];
-  s << "level pass  stop            iters  evals   seconds   energy start -> end      absolute\n";
+  s << "level pass  stop            iters  evals   seconds   energy start -> end      absolute   IoU start -> end\n";
   for (std::size_t k = 0; k < passes.size(); ++k) {
     const PassSummary& p = passes[k];
-    std::snprintf(line, sizeof line, "%5d  %c    %-14s %6d %6d %9.2f   %+.6f -> %+.6f   %+.6f%s%s\n", p.level,
-                  p.kind, p.stop.c_str(), p.iterations, p.evaluations, p.seconds, p.energy_start,
-                  p.energy_end, p.absolute_end, int(k) == best_pass ? "  best" : "",
-                  p.stalled ? "  STALLED" : "");
+    std::snprintf(line, sizeof line, "%5d  %c    %-14s %6d %6d %9.2f   %+.6f -> %+.6f   %+.6f   %.4f -> %.4f%s%s%s\n",
+                  p.level, p.kind, p.stop.c_str(), p.iterations, p.evaluations, p.seconds, p.energy_start,
+                  p.energy_end, p.absolute_end, p.iou_start, p.iou_end, int(k) == best_pass ? "  best" : "",
+                  p.stalled ? "  STALLED" : "", p.iou_loss ? "  SET WORSE" : "");
+    s << line;
+  }
+  for (const PassSummary& p : passes)
+    if (p.iou_loss) {
+      std::snprintf(line, sizeof line,
+                    "set worse: level %d pass %c (pass %d of the level) lowered the one-step IoU on the target grid "
+                    "from %.4f to %.4f%s\n",
+                    p.level, p.kind, p.pass_index + 1, p.iou_start, p.iou_end,
+                    p.eligible ? "" : "; its map is worse than the start's and is not kept");
+      s << line;
+    }
+  if (lowest_psi_pass >= 0 && lowest_psi_pass < int(passes.size())) {
+    const PassSummary& p = passes[std::size_t(lowest_psi_pass)];
+    std::snprintf(line, sizeof line,
+                  "not kept: the lowest absolute energy, %+.6f after level %d pass %c (pass %d of %zu), has one-step "
+                  "IoU %.4f on the target grid, below the start's %.4f (keep: lowest-psi returns it)\n",
+                  lowest_psi, p.level, p.kind, lowest_psi_pass + 1, passes.size(), p.iou_end, iou_start);
     s << line;
   }
   // Each pass's narrow-band work goes to summary.json ("band") and the log's pass_end lines, not
@@ -77,8 +96,9 @@ std::string OptimizeSummary::Report() const {
     if (p.stalled)
       s << "stalled: level " << p.level << " pass " << p.kind << " (pass " << p.pass_index + 1
         << " of the level) made no iteration: " << p.StallReason() << "\n";
-  std::snprintf(line, sizeof line, "total %.1f s; absolute energy %+.6f -> %+.6f (%s)%s\n", seconds,
-                absolute_start, absolute_end, BestPassName().c_str(),
+  std::snprintf(line, sizeof line,
+                "total %.1f s; absolute energy %+.6f -> %+.6f, one-step IoU on the target grid %.4f -> %.4f (%s)%s\n",
+                seconds, absolute_start, absolute_end, iou_start, iou_end, BestPassName().c_str(),
                 complete ? "" : (" (" + stop_reason + ")").c_str());
   s << line;
   return s.str();
@@ -157,6 +177,9 @@ class Runner {
     loglinear_ = o_.loglinear(evaluator_, st_.summary.between_nodes);
     weights_.emplace(sdf_, o_.weights, map_, o_.energy, loglinear_, st_.summary.between_nodes);
     ResolveLevels();
+    // The start's one-step IoU: map_ is the start map on a resume too (the checkpoint must match it).
+    st_.summary.iou_start = weights_->TargetIou(map_.variables());
+    if (!o_.resume) st_.summary.iou_end = st_.summary.iou_start;
     if (!o_.resume) NotifyRunStart();
 
     SignalGuard signals;
@@ -389,14 +412,32 @@ class Runner {
   }
 
   // The pass's absolute energy, the best map so far, the pass_end record.
+  // A map is kept only if its one-step IoU on the target grid is at least the start's (keep iou).
   void EndPass(const IterationSummary& where, PassSummary& ps) {
     ps.absolute_end = weights_->Absolute(st_.x.template cast<double>());
     ps.stalled = ps.iterations == 0;
+    ps.iou_start = weights_->TargetIou(st_.pass_start_x.template cast<double>());
+    ps.iou_end = weights_->TargetIou(st_.x.template cast<double>());
+    ps.iou_loss = ps.iou_end < ps.iou_start - o_.iou_tolerance;
+    ps.eligible = o_.keep == OptimizeOptions::Keep::kLowestPsi || ps.iou_end >= st_.summary.iou_start;
+    const int index = int(st_.summary.passes.size());
     if (ps.absolute_end < st_.best_absolute) {
-      st_.best_absolute = ps.absolute_end;
-      st_.best_x = st_.x;
-      st_.summary.best_pass = int(st_.summary.passes.size());
+      if (ps.eligible) {
+        st_.best_absolute = ps.absolute_end;
+        st_.best_x = st_.x;
+        st_.summary.best_pass = index;
+        st_.summary.iou_end = ps.iou_end;
+      }
     }
+    // The lowest absolute energy of the run, when the kept map is another.
+    double lowest = st_.summary.absolute_start;
+    int lowest_pass = -1;
+    for (std::size_t k = 0; k <= st_.summary.passes.size(); ++k) {
+      const double a = k < st_.summary.passes.size() ? st_.summary.passes[k].absolute_end : ps.absolute_end;
+      if (a < lowest) lowest = a, lowest_pass = int(k);
+    }
+    st_.summary.lowest_psi_pass = lowest_pass != st_.summary.best_pass ? lowest_pass : -1;
+    st_.summary.lowest_psi = lowest;
     st_.summary.passes.push_back(ps);
     IterationSummary s = where;
     s.type = Type::kPassEnd;

@@ -90,6 +90,16 @@ struct OptimizeOptions {
   // (fidelity.md §11). About twice the work of a pass and of the absolute energy; kAuto: only on
   // a thin-walled target (quijibo/target.h); kOff: the paper's energy, on the nodes.
   ThinWallSwitch between_nodes = ThinWallSwitch::kOn;
+  // Which map the run returns. kIou: the lowest absolute energy among the start and the pass ends
+  // whose one-step IoU on the target grid is at least the start's, so the result never fits the
+  // target worse than the start by that measure (a poor start can slide towards an empty set while
+  // the energy falls: docs/fidelity.md §12). kLowestPsi: the lowest absolute energy, whatever its IoU.
+  enum class Keep { kIou, kLowestPsi };
+  Keep keep = Keep::kIou;
+  // A pass whose one-step IoU on the target grid ends more than this below its start's is
+  // reported as making the set worse (pass table, summary.json, log): the report's own bar
+  // (QualityThresholds::max_iou_loss).
+  double iou_tolerance = 0.002;
   // The log-linear evaluator's log-distance storage and, for kAuto, the finest level's budget
   // (kept in GB, the setting's unit, so that the JSON value reads back exactly).
   LogLinearOptions::Storage storage = LogLinearOptions{}.storage;
@@ -111,6 +121,7 @@ struct OptimizeOptions {
   inline static const std::vector<std::string> kWeightNames = {"layer", "inverse", "balanced"};
   inline static const std::vector<std::string> kLevelWeightNames = {"sample", "recompute"};
   inline static const std::vector<std::string> kLevelStartNames = {"best", "last"};
+  inline static const std::vector<std::string> kKeepNames = {"iou", "lowest-psi"};
   inline static const std::vector<std::string> kStorageNames = {"auto", "double", "float", "on-the-fly"};
 
   static const Schema<OptimizeOptions>& Settings();
@@ -137,6 +148,8 @@ struct OptimizeOptions {
 };
 
 OptimizeOptions::LevelStart ParseLevelStart(const std::string& name);  // best|last
+OptimizeOptions::Keep ParseKeep(const std::string& name);              // iou|lowest-psi
+std::string KeepName(OptimizeOptions::Keep k);
 std::string LevelStartName(OptimizeOptions::LevelStart s);
 std::string LevelWeightsName(LevelWeights w);                          // sample|recompute
 LevelWeights ParseLevelWeights(const std::string& name);
@@ -147,6 +160,12 @@ struct OptimizeSummary {
   double absolute_start = 0;
   double absolute_end = 0;   // of the returned map: the best over the start and the pass ends
   int best_pass = -1;        // index into passes of the returned map; -1: the start
+  double iou_start = 0;      // the start map's one-step IoU on the target grid
+  double iou_end = 0;        // the returned map's
+  // The pass with the lowest absolute energy when it is not the returned one (keep iou: its set
+  // fits the target worse than the start's); -1 otherwise.
+  int lowest_psi_pass = -1;
+  double lowest_psi = 0;
   // Each level: its scheduled resolution, the one it ran at (min_level_fidelity) and the
   // LevelFidelity of the latter.
   struct Level {

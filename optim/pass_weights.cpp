@@ -1,6 +1,7 @@
 #include "optim/pass_weights.h"
 
 #include "optim/reweight.h"
+#include "quijibo/iou.h"
 
 namespace quijibo::optim {
 
@@ -18,6 +19,7 @@ PassWeights::PassWeights(const ScalarGrid& sdf, WeightField field, const Rationa
     if (corners_absolute_->storage() == LogLinearOptions::Storage::kOnTheFly)
       corners_band_ = std::make_unique<BandEnergy>(corners_absolute_.get());
   }
+  trivial_ = between_nodes ? TrivialSetEnergy({&finest_, &finest_corners_}) : TrivialSetEnergy({&finest_});
 }
 
 EnergyGrid PassWeights::Level(int resolution, LevelWeights level_weights) const {
@@ -58,7 +60,18 @@ double PassWeights::Absolute(const Eigen::VectorXd& x) {
                          : corners_absolute_->Evaluate(x, EnergyMode::kFull, false).energy;
   }
   if (shared_ && pass_ && set_) GiveBack();
-  return psi;
+  return psi - trivial_;
+}
+
+double PassWeights::TargetIou(const Eigen::VectorXd& x) const {
+  const std::vector<double> L = absolute_band_ ? absolute_band_->LogModulus(x) : absolute_.LogModulus(x);
+  std::int64_t both = 0, either = 0;
+  for (std::size_t c = 0; c < L.size(); ++c) {
+    const bool in_set = L[c] < 0, in_shape = sdf_.values[c] < 0;
+    both += in_set && in_shape;
+    either += in_set || in_shape;
+  }
+  return IntersectionOverUnion(both, either);
 }
 
 }  // namespace quijibo::optim

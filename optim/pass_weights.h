@@ -61,13 +61,20 @@ class PassWeights {
     set_ = nullptr;
     set_corners_ = nullptr;
   }
-  // psi of x on the finest grid with the original weights.
+  // psi of x on the finest grid with the original weights, counted from the better trivial set
+  // (TrivialSetEnergy, quijibo/energy.h): the empty set and the full box score >= 0.
   double Absolute(const Eigen::VectorXd& x);
+  // The constant Absolute subtracts from the sum over the grids: TrivialSetEnergy of the finest grid
+  // (and its corners). A pass minimizes the sum without it (a constant has no gradient).
+  double trivial_set_energy() const { return trivial_; }
+  // The one-step IoU of x on the target grid: {L < 0} against {phi < 0} at the finest grid's nodes.
+  double TargetIou(const Eigen::VectorXd& x) const;
 
  private:
   const ScalarGrid& sdf_;
   WeightField field_;
   std::vector<double> finest_w_;
+  double trivial_ = 0;
   EnergyGrid finest_;
   LogLinearEnergy absolute_;
   std::unique_ptr<BandEnergy> absolute_band_;

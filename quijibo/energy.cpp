@@ -62,11 +62,22 @@ double MedianLogModulus(const RationalMap& map, const EnergyGrid& grid) {
   return L[L.size() / 2];
 }
 
+double TrivialSetEnergy(std::initializer_list<const EnergyGrid*> grids) {
+  double sum = 0, sum_abs = 0, eta = 0;
+  for (const EnergyGrid* g : grids) {
+    for (double w : g->weight) sum += w, sum_abs += std::abs(w);
+    eta += g->eta;
+  }
+  // The halves-normalized fields sum to 0 up to rounding; leave them exactly as they were.
+  if (!(eta > 0) || std::abs(sum) <= 1e-9 * sum_abs) return 0.0;
+  return -std::abs(sum) / eta;
+}
+
 double EnergyOfField(const EnergyGrid& g, const std::vector<double>& L, double a) {
   double s = 0;
   for (std::size_t c = 0; c < L.size(); ++c)
     if (std::isfinite(L[c])) s += -std::tanh(a * L[c]) * g.weight[c];
-  return s / g.eta;
+  return s / g.eta - TrivialSetEnergy({&g});
 }
 
 }  // namespace quijibo

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -62,7 +63,17 @@ std::vector<char> SingularCells(const RationalMap& map, const EnergyGrid& grid,
 // give random maps a sensible C.
 double MedianLogModulus(const RationalMap& map, const EnergyGrid& grid);
 
-// psi = (1/eta) sum_c -tanh(alpha L_c) W_c of any field L on the grid's cells (the 2015 energy of
+// The energy of the better trivial set: min(psi(empty set), psi(full box)) = -|sum W| / sum eta
+// over `grids` (one grid, or a grid and its corner twin: psi is then the sum over both, each term
+// divided by both etas), 0 when |sum W| is rounding noise (the `layer` and `inverse` fields sum to
+// 0). psi as every face reports it (the absolute energy, `quijibo energy`, EnergyOfField) is the
+// evaluators' sum minus this constant, so that the empty set (L > 0 everywhere: psi = -sum W / eta)
+// and the full box (L < 0: +sum W / eta) both score >= 0 in every weight mode, and psi < 0 means
+// better than either trivial set. A pass minimizes the sum itself: a constant has no gradient, so
+// the optimization is the same. Why not weights that sum to 0: docs/fidelity.md §12.
+double TrivialSetEnergy(std::initializer_list<const EnergyGrid*> grids);
+
+// psi = (1/eta) sum_c -tanh(alpha L_c) W_c - TrivialSetEnergy of any field L on the grid's cells (the 2015 energy of
 // another method's log-modulus, for comparisons); non-finite L are left out.
 double EnergyOfField(const EnergyGrid& grid, const std::vector<double>& L, double alpha);
 

@@ -84,10 +84,13 @@ double Median(std::vector<double> v) {
 }
 
 template <class Real>
-json Report(const RationalMap& map, const Evaluation<Real>& ev, const std::vector<double>& seconds) {
+json Report(const RationalMap& map, const Evaluation<Real>& ev, const std::vector<double>& seconds, double trivial) {
   json r;
-  r["energy"] = ToDouble(ev.energy);
-  r["energy_exact"] = Exact(ev.energy);
+  // psi counted from the better trivial set (TrivialSetEnergy, quijibo/energy.h); 0 for layer and inverse.
+  const Real psi = trivial == 0 ? ev.energy : Real(ev.energy - Real(trivial));
+  r["energy"] = ToDouble(psi);
+  r["energy_exact"] = Exact(psi);
+  r["trivial_set_energy"] = trivial;
   if (ev.gradient.size() > 0) {
     json g, exact = json::array();
     g["ln_C"] = ToDouble(ev.gradient[0]);
@@ -120,6 +123,7 @@ json EvaluateEnergy(const RationalMap& map, const EnergyGrid& grid, const Energy
   const EnergyOptions& options = choice.energy;
   const std::string evaluator = choice.evaluator == "dense" ? "loglinear" : choice.evaluator;
   json out;
+  const double trivial = TrivialSetEnergy({&grid});
   const Eigen::VectorXd x = map.variables();
   std::vector<double> seconds;
   if (evaluator == "loglinear") {
@@ -137,7 +141,7 @@ json EvaluateEnergy(const RationalMap& map, const EnergyGrid& grid, const Energy
       ev = energy.Evaluate(x, choice.mode, choice.gradient);
       seconds.push_back(ev.seconds);
     }
-    out = Report(map, ev, seconds);
+    out = Report(map, ev, seconds, trivial);
     out["setup_seconds"] = energy.setup_seconds() + pass_seconds;
     out["storage"] = StorageName(energy.storage());
     out["matrix_bytes"] = energy.matrix_bytes();
@@ -150,7 +154,7 @@ json EvaluateEnergy(const RationalMap& map, const EnergyGrid& grid, const Energy
         ev = energy.Evaluate(xr, choice.mode, choice.gradient);
         seconds.push_back(ev.seconds);
       }
-      return Report(map, ev, seconds);
+      return Report(map, ev, seconds, trivial);
     });
     out["setup_seconds"] = 0.0;
   }

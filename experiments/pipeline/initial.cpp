@@ -151,7 +151,21 @@ void AddMonopoleSettings(Schema<O>& s) {
       .When(Kind({"monopoles"}))
       .Boolean("zero_roots", "--no-zero-roots", "monopoles: leave out the reference's leading zero roots",
                [](auto& o) -> bool& { return o.guess.leading_zero_roots; })
-      .Doc("monopoles: the reference's leading zero roots (`--no-zero-roots` leaves them out)")
+      .Doc("monopoles: a root at the origin: with `scan` `reference` the reference's leading zero roots (a top and a "
+           "bottom root, exponent 1, which cancel only while tau = beta); with `scan` `iou` one top root, its exponent "
+           "the smallest monopole's, so the origin stays a zero of R (`--no-zero-roots` leaves it out)")
+      .When(Kind({"monopoles"}))
+      .Enum(
+          "scan", "--start-scan",
+          "monopoles: iou (the level of the monopoles' field with the best one-step IoU, made as steep as the "
+          "log-kernel start: not saturated; amplitude unused) or reference (the reference's ln C scan at amplitude)",
+          monopole::kStartScanNames, [](const O& o) { return monopole::StartScanName(o.guess.scan); },
+          [](O& o, const std::string& v) { o.guess.scan = monopole::ParseStartScan(v); })
+      .Doc("monopoles: how the start's ln C and steepness are chosen: `iou`, the level set of the monopoles' field "
+           "with the best one-step IoU on the target grid, its exponents scaled so that |alpha L| is 1 at the "
+           "median cell within two cells of the surface (a start that is not saturated has a gradient; `amplitude` "
+           "is not used); `reference`, the reference code's 1-D scan of ln C at `amplitude` "
+           "([fidelity.md](fidelity.md) §12)")
       .When(Kind({"monopoles"}))
       .Integer(
           "scan_resolution", "--scan-resolution", "monopoles: grid of the ln C scan",
@@ -280,16 +294,21 @@ MonopoleStartVerdict JudgeMonopoleStart(const monopole::GreedyFitSummary& fit, d
   if (fit.final_relative_residual > epsilon)
     warning = fit_text + std::string("; raise \"candidates\" (--candidates) or \"epsilon\" (--epsilon)");
   // Measured at 97^3 (docs/benchmarks.md §2): the starts the optimizer collapsed from to an empty
-  // set had one-step IoU 0.06-0.11, the ones it optimized 0.54-0.58.
+  // set had one-step IoU 0.06-0.11, the ones it optimized 0.54-0.58. The IoU scan (the default)
+  // already takes the best set the monopoles' field has, and the optimizer only reweights the roots:
+  // below this bar the chain cannot carry the shape through, so the start is refused.
   constexpr double kLowStartIou = 0.25;
   if (start.iou < kLowStartIou) {
-    char text[512];
+    char text[1024];
     std::snprintf(text, sizeof text,
-                  "the monopole start's one-step set overlaps the shape little (IoU %.3g): the optimizer may "
-                  "collapse to an empty set; fit P (\"fit_target\": \"potential\") or use \"kind\": "
-                  "\"log-kernel\"",
-                  start.iou);
-    warning += (warning.empty() ? "" : "; ") + std::string(text);
+                  "the monopole start's one-step set overlaps the shape little (IoU %.3g, below %.2g): no level set "
+                  "of the monopoles' field follows the shape, and the optimizer, which reweights the roots but does "
+                  "not move them, would keep this start or empty the set; %s. Lower \"epsilon\" (--epsilon) for "
+                  "more monopoles, fit P (\"fit_target\": \"potential\", the default), or use the log-kernel fit "
+                  "(\"kind\": \"log-kernel\"; --initializer log-kernel) (docs/fidelity.md §12)",
+                  start.iou, kLowStartIou, fit_text);
+    v.refusal = text;
+    return v;
   }
   v.warning = warning;
   return v;
@@ -348,6 +367,8 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
                     {"seed", mo.fit.seed},
                     {"sampling_seed", mo.sampling.seed},
                     {"amplitude", o.guess.amplitude},
+                    {"scan", monopole::StartScanName(o.guess.scan)},
+                    {"steepness", scan.steepness},
                     {"relative_residual", mono.fit.final_relative_residual},
                     {"monopoles", mono.monopoles.size()}};
   return map;

@@ -83,9 +83,13 @@ void OptimizerSection(Page& page, const OptimizeStageOptions& o) {
   if (best >= 0 && best < int(passes.size()))
     md << "the map after level " << passes[best].value("level", 0) << " pass "
        << passes[best].value("pass", std::string("?")) << " (pass " << best + 1 << " of " << passes.size()
-       << "), the lowest absolute energy of the run.\n\n";
+       << (s.value("keep", std::string("lowest-psi")) == "iou"
+               ? "), the lowest absolute energy among the maps whose one-step IoU on the target grid is at least "
+                 "the start's.\n\n"
+               : "), the lowest absolute energy of the run.\n\n");
   else
-    md << "the start map: no pass lowered the absolute energy.\n\n";
+    md << "the start map: no pass lowered the absolute energy"
+       << (s.value("keep", std::string("lowest-psi")) == "iou" ? " without lowering the one-step IoU" : "") << ".\n\n";
   md << "| level | pass | stop | iterations | evaluations | seconds | energy start | energy end | absolute end |\n"
         "|---|---|---|---|---|---|---|---|---|\n";
   for (std::size_t k = 0; k < passes.size(); ++k) {
@@ -104,6 +108,17 @@ void OptimizerSection(Page& page, const OptimizeStageOptions& o) {
          << " (pass " << p.value("pass_index", 0) + 1
          << " of the level) made no iteration: " << p.value("stall_reason", p.value("stop", std::string()))
          << ".\n\n";
+  for (const json& p : passes)
+    if (p.value("iou_loss", false))
+      md << "**Set worse:** level " << p.value("level", 0) << " pass " << p.value("pass", std::string("?"))
+         << " lowered the one-step IoU on the target grid from " << Fixed(p.value("iou_start", 0.0), 4) << " to "
+         << Fixed(p.value("iou_end", 0.0), 4) << ".\n\n";
+  const int lowest = s.value("lowest_psi_pass", -1);
+  if (lowest >= 0 && lowest < int(passes.size()))
+    md << "**Not kept:** the lowest absolute energy, " << Fixed(s.value("lowest_psi", 0.0), 6) << " after level "
+       << passes[lowest].value("level", 0) << " pass " << passes[lowest].value("pass", std::string("?"))
+       << ", has one-step IoU " << Fixed(passes[lowest].value("iou_end", 0.0), 4) << " on the target grid, below the "
+       << "start's " << Fixed(s.value("iou_start", 0.0), 4) << " (`\"keep\": \"lowest-psi\"` returns it).\n\n";
 }
 
 // The mesh: its files and figures, or "No surface".

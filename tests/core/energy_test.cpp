@@ -197,6 +197,38 @@ TEST(EnergyTest, PerfectAndInvertedFitsReachTheBounds) {
   EXPECT_GT(LogLinearEnergy(inv, grid).Evaluate(inv.variables(), EnergyMode::kFull, false).energy, 0.95);
 }
 
+// In every weight mode the empty set (L > 0 everywhere) and the full box (L < 0) score >= 0:
+// psi is counted from the better of the two (TrivialSetEnergy). Without that constant the balanced
+// field, whose outside outweighs its inside, would score the empty set below 0 (the test can fail).
+TEST(EnergyTest, NoWeightModeRewardsATrivialSet) {
+  for (const char* shape : {"torus", "sphere:radius=1.3"}) {
+    const ScalarGrid sdf = AnalyticTarget(shape, GridFrame::Cube(24, {0, 0, 0}, 3.2));
+    for (WeightField w : {WeightField::kLayer, WeightField::kInverse, WeightField::kBalanced}) {
+      const EnergyGrid grid = MakeEnergyGrid(sdf, w);
+      const std::vector<double> empty(std::size_t(grid.frame.cell_count()), 5.0), full(empty.size(), -5.0);
+      const double psi_empty = EnergyOfField(grid, empty, 10.0), psi_full = EnergyOfField(grid, full, 10.0);
+      EXPECT_GE(psi_empty, -1e-12) << shape << " " << WeightFieldName(w);
+      EXPECT_GE(psi_full, -1e-12) << shape << " " << WeightFieldName(w);
+      EXPECT_NEAR(std::min(psi_empty, psi_full), 0.0, 1e-12) << shape << " " << WeightFieldName(w);
+      // A perfect fit scores below both: -1 + |sum W| / eta = -2 (sum of the smaller side's |W|) / eta.
+      std::vector<double> perfect(empty.size());
+      double in = 0, out = 0;
+      for (std::size_t c = 0; c < perfect.size(); ++c) {
+        perfect[c] = sdf.values[c] < 0 ? -5.0 : 5.0;
+        (sdf.values[c] < 0 ? in : out) += std::abs(grid.weight[c]);
+      }
+      EXPECT_NEAR(EnergyOfField(grid, perfect, 10.0), -2 * std::min(in, out) / grid.eta, 1e-9)
+          << shape << " " << WeightFieldName(w);
+      EXPECT_LT(EnergyOfField(grid, perfect, 10.0), -0.2) << shape << " " << WeightFieldName(w);
+      if (w == WeightField::kBalanced) {
+        EXPECT_LT(TrivialSetEnergy({&grid}), -0.1) << shape;  // the raw sum rewards the empty set
+      } else {
+        EXPECT_EQ(TrivialSetEnergy({&grid}), 0.0) << shape;  // halves: nothing changes
+      }
+    }
+  }
+}
+
 TEST(EnergyTest, BadVariablesAreRejected) {
   const EnergyProblem p = MakeEnergyProblem(6, 2, 2, 0.5, 1.0, 1);
   const LogLinearEnergy e(p.map, p.grid);

@@ -22,8 +22,20 @@ TEST(InitialGuess, SplitsWeightsIntoTopAndBottomRootsWithTheAmplitude) {
   const std::vector<Monopole> monopoles = {{{0.5, 0.0, 0.0}, 0.2}, {{-0.5, 0.1, 0.0}, -0.1}, {{0.0, 0.5, 0.2}, 0.05}};
   InitialGuessOptions o;
   o.amplitude = 40.0;
+  // The IoU scan (the default): one top root at the origin instead of the zero roots, every exponent
+  // scaled by the same steepness (the monopoles' ratios kept), no bottom root at the origin.
+  const RationalMap scanned = InitialMap(monopoles, frame, Sphere(1.0), o);
+  ASSERT_EQ(scanned.top_count(), 3);
+  ASSERT_EQ(scanned.bottom_count(), 1);
+  EXPECT_FALSE(scanned.leading_zero_roots);
+  EXPECT_EQ(scanned.top_roots[0], (Vec4{0, 0, 0, 0}));
+  EXPECT_NE(scanned.bottom_roots[0], (Vec4{0, 0, 0, 0}));
+  EXPECT_NEAR(scanned.top_exponents[1] / scanned.top_exponents[2], 0.2 / 0.05, 1e-12);
+  EXPECT_NEAR(scanned.bottom_exponents[0] / scanned.top_exponents[1], 0.1 / 0.2, 1e-12);
+  EXPECT_NEAR(scanned.top_exponents[0], scanned.top_exponents[2], 1e-12);  // the smallest monopole's
+  o.scan = StartScan::kReference;
   RationalMap m = InitialMap(monopoles, frame, Sphere(1.0), o);
-  // Leading zero roots first, exponent 1, not amplified.
+  // The reference scan: leading zero roots first, exponent 1, not amplified.
   ASSERT_EQ(m.top_count(), 3);
   ASSERT_EQ(m.bottom_count(), 2);
   EXPECT_EQ(m.top_roots[0], (Vec4{0, 0, 0, 0}));

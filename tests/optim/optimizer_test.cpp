@@ -214,6 +214,61 @@ TEST(OptimizerTest, AScheduleLowersTheEnergyAndLogsEveryIteration) {
   std::filesystem::remove_all(o.out_dir);
 }
 
+// The one-step IoU of `m` on the target grid, {L < 0} against {phi < 0}, by the map itself.
+double OneStepIou(const ScalarGrid& sdf, const RationalMap& m) {
+  long long both = 0, either = 0;
+  for (std::int64_t c = 0; c < sdf.frame.cell_count(); ++c) {
+    const bool in_set = OneStepLogModulus(m, sdf.frame.cell_center(c)) < 0, in_shape = sdf.values[std::size_t(c)] < 0;
+    both += in_set && in_shape;
+    either += in_set || in_shape;
+  }
+  return either ? double(both) / double(either) : 1.0;
+}
+
+// keep iou (the default): the returned map is the lowest absolute energy among the maps whose
+// one-step IoU on the target grid is at least the start's; each pass's IoU is recorded and a pass
+// that lowers it by more than the tolerance is flagged. keep lowest-psi returns the lowest energy.
+// The start here (a random map, a poor fit) is one whose passes lower the energy and the IoU alike.
+TEST(OptimizerTest, TheKeptMapIsNeverWorseThanTheStartByIou) {
+  for (WeightField w : {WeightField::kBalanced, WeightField::kLayer}) {
+    SCOPED_TRACE(WeightFieldName(w));
+    const SmallRun run;
+    OptimizeOptions o = ScheduleAsWritten("10(VFRF)20(VF)", 40, "");
+    o.weights = w;
+    RationalMap kept = run.map;
+    const OptimizeSummary s = Optimize(run.sdf, kept, o);
+    ASSERT_TRUE(s.complete);
+    EXPECT_NEAR(s.iou_start, OneStepIou(run.sdf, run.map), 1e-3);
+    EXPECT_NEAR(s.iou_end, OneStepIou(run.sdf, kept), 1e-3);
+    EXPECT_GE(s.iou_end, s.iou_start);
+    double best = s.absolute_start, lowest = s.absolute_start;
+    int lowest_pass = -1;
+    for (std::size_t k = 0; k < s.passes.size(); ++k) {
+      const PassSummary& p = s.passes[k];
+      EXPECT_EQ(p.iou_loss, p.iou_end < p.iou_start - o.iou_tolerance) << k;
+      EXPECT_EQ(p.eligible, p.iou_end >= s.iou_start) << k;
+      if (k > 0) {
+        EXPECT_EQ(p.iou_start, s.passes[k - 1].iou_end) << k;
+      }
+      if (p.eligible && p.absolute_end < best) best = p.absolute_end;
+      if (p.absolute_end < lowest) lowest = p.absolute_end, lowest_pass = int(k);
+    }
+    EXPECT_EQ(s.absolute_end, best);
+    EXPECT_EQ(s.lowest_psi_pass, lowest < best ? lowest_pass : -1);
+    if (s.lowest_psi_pass >= 0) {
+      EXPECT_LT(s.passes[std::size_t(s.lowest_psi_pass)].iou_end, s.iou_start);
+      EXPECT_NE(s.Report().find("not kept: the lowest absolute energy"), std::string::npos);
+    }
+    o.keep = OptimizeOptions::Keep::kLowestPsi;
+    RationalMap lowest_map = run.map;
+    const OptimizeSummary l = Optimize(run.sdf, lowest_map, o);
+    EXPECT_EQ(l.absolute_end, lowest);
+    EXPECT_EQ(l.lowest_psi_pass, -1);
+    std::fprintf(stderr, "%s: IoU start %.4f, kept %.4f (psi %.4f), lowest psi %.4f at IoU %.4f\n",
+                 WeightFieldName(w).c_str(), s.iou_start, s.iou_end, s.absolute_end, l.absolute_end, l.iou_end);
+  }
+}
+
 // The result is the map of the lowest absolute energy (start or any pass end), not the last map,
 // and the summary names its pass. The last pass here, on a coarser level, fits that level's grid
 // and ends above the pass before on the finest one, as an R pass does with its reweighted field.
@@ -221,6 +276,7 @@ TEST(OptimizerTest, TheResultIsTheBestMapOverAllPasses) {
   SmallRun run;
   OptimizeOptions o = ScheduleAsWritten("20(VF)8(V)", 40, TempDir("best"));
   o.weights = WeightField::kLayer;
+  o.keep = OptimizeOptions::Keep::kLowestPsi;
   const OptimizeSummary s = Optimize(run.sdf, run.map, o);
   ASSERT_TRUE(s.complete);
   double best = s.absolute_start;

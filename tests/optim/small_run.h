@@ -31,9 +31,10 @@ struct SmallRun {
     map.ln_C = -MedianLogModulus(map, MakeEnergyGrid(sdf, WeightField::kLayer));
   }
   // The exact (log-linear) energy of `m` on the target's own grid with `weights`: what a run
-  // reports as its absolute energy.
+  // reports as its absolute energy (counted from the better trivial set).
   double AbsoluteEnergy(const RationalMap& m, WeightField weights) const {
-    return LogLinearEnergy(m, MakeEnergyGrid(sdf, weights)).Evaluate(m.variables(), EnergyMode::kFull, false).energy;
+    const EnergyGrid grid = MakeEnergyGrid(sdf, weights);
+    return LogLinearEnergy(m, grid).Evaluate(m.variables(), EnergyMode::kFull, false).energy - TrivialSetEnergy({&grid});
   }
 };
 

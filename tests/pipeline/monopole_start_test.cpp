@@ -36,13 +36,13 @@ TEST(MonopoleStart, AnInvertedStartIsRefusedWithTheResidualAndWhatToDo) {
 }
 
 // The tooth's 1 - P start on the unit box (issue 29): upright by the medians, but the optimizer
-// collapsed from it to an empty set.
-TEST(MonopoleStart, AStartThatBarelyOverlapsTheShapeIsWarnedOf) {
+// collapsed from it to an empty set. Refused, saying why and what to do.
+TEST(MonopoleStart, AStartThatBarelyOverlapsTheShapeIsRefused) {
   const monopole::StartCheck start{.median_inside = -0.36, .median_outside = -0.22, .iou = 0.108};
   const MonopoleStartVerdict v = Judge(0.041, monopole::FitStop::kCandidatesExhausted, start);
-  EXPECT_TRUE(v.refusal.empty());
-  for (const char* part : {"0.041", "--candidates", "IoU 0.108", "empty set", "potential"})
-    EXPECT_NE(v.warning.find(part), std::string::npos) << part << " in: " << v.warning;
+  EXPECT_FALSE(v.refusal.empty());
+  for (const char* part : {"0.041", "IoU 0.108", "empty the set", "--epsilon", "potential", "log-kernel"})
+    EXPECT_NE(v.refusal.find(part), std::string::npos) << part << " in: " << v.refusal;
 }
 
 TEST(MonopoleStart, AnUprightConvergedStartPassesAndAnUnconvergedOneIsWarnedOf) {
@@ -74,6 +74,14 @@ TEST(MonopoleStart, TheSphereGetsAConvergedUprightStart) {
   EXPECT_EQ(r.summary.at("fit_stop").get<std::string>(), "converged");
   EXPECT_FALSE(r.summary.at("start").at("inverted").get<bool>());
   EXPECT_GT(r.summary.at("start").at("iou").get<double>(), 0.25);  // no low-overlap warning
+  // The IoU scan (the default) starts unsaturated, with the best one-step IoU of the monopoles'
+  // sets: at least the reference scan's, whose amplitude saturates the start.
+  EXPECT_LT(r.summary.at("start").at("saturated_fraction").get<double>(), 0.1);
+  o.guess.scan = monopole::StartScan::kReference;
+  const InitialGuessResult ref = InitialGuess(target, o);
+  EXPECT_GE(r.summary.at("start").at("iou").get<double>(), ref.summary.at("start").at("iou").get<double>() - 1e-3);
+  EXPECT_GT(ref.summary.at("start").at("saturated_fraction").get<double>(),
+            r.summary.at("start").at("saturated_fraction").get<double>());
 }
 
 }  // namespace
