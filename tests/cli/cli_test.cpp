@@ -275,6 +275,8 @@ TEST(GalleryExperiments, EachChecks) {
   int checked = 0;
   for (const auto& e : std::filesystem::directory_iterator(std::string(QUIJIBO_SOURCE_DIR) + "/experiments/gallery")) {
     if (e.path().extension() != ".json") continue;
+    // Portal specs and versor polynomials of the gallery's scripts carry a "format"; experiments do not.
+    if (nlohmann::json::parse(std::ifstream(e.path())).contains("format")) continue;
     const CommandResult r = RunQuijibo("run --check " + e.path().string());
     EXPECT_EQ(r.code, 0) << e.path() << "\n" << r.out;
     ++checked;
