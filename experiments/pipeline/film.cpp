@@ -248,11 +248,14 @@ FilmSummary MakeFilm(const FilmOptions& o, const std::string& out, bool quiet) {
   bool untranslated_first = false;
   if (!o.from) {
     if (o.vary == "translate_potential") {
-      from = OneStepLogModulus(iterated, {0.0, 0.0, 0.0});
+      // The first frame untranslated; the others from the potential at the origin, or 4.5 below
+      // `to` when the origin is deeper (a root there: -inf), where a translation barely shows.
+      const double origin = OneStepLogModulus(iterated, {0.0, 0.0, 0.0});
       untranslated_first = true;
-      if (!(from < *o.to))
-        throw Error("film: the potential at the origin (" + Fixed(from, 3) + ") is not below \"to\" (" +
+      if (!(origin < *o.to))
+        throw Error("film: the potential at the origin (" + Fixed(origin, 3) + ") is not below \"to\" (" +
                     Fixed(*o.to, 3) + "): no translation reaches it");
+      from = std::max(origin, *o.to - 4.5);
     } else if (o.vary == "detail") {
       from = o.mesh.detail;
     } else if (o.vary == "iterations") {

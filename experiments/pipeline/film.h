@@ -8,7 +8,8 @@
 // The settings that can move (`vary`), between `from` and `to` linearly over the frames:
 //   translate_potential  the root translation by its effect (TranslationForPotential) along
 //                        `mesh.translate`'s direction (default z); `from` unset: no translation on
-//                        the first frame, the potential at the origin after it
+//                        the first frame, then from the potential at the origin or `to` - 4.5,
+//                        whichever is higher (a root at the origin makes it -inf)
 //   translation          the root translation's length along that direction (iteration frame units)
 //   detail               fractal detail (WithDetail)
 //   iterations           the map applications n (rounded)
