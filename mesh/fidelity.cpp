@@ -138,7 +138,7 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
   };
   std::unique_ptr<JuliaMap<double>> julia;
   JuliaSetupOptions setup;
-  setup.reference_frame = o.reference_frame;
+  setup.frame = o.frame;
   setup.detail = o.detail;
   const RationalMap iterated = o.iterated ? *o.iterated : MakeJuliaSetup(map, setup).map;
   if (o.julia.iterations > 0) julia = std::make_unique<JuliaMap<double>>(iterated, o.julia);

@@ -16,7 +16,7 @@
 //   closed IoU IoU of the n-step set after a morphological closing (dilation then erosion by a cube
 //              of `closing` lattice cells' half side): whether the coarse shape, the silhouette,
 //              stays when the surface grows intricate (holes and folds finer than the closing fill)
-// The n-step set is of IterationMap(map, reference_frame, detail) (the mesh stage's
+// The n-step set is of IterationMap(map, frame, detail) (the mesh stage's
 // `iteration_frame` and `detail`), sampled at the same user points.
 // Detail of a meshed set (MeasureMeshDetail): its area against the target mesh's, its connected
 // components, and a box-counting dimension: the boxes of side s = side / 2^k (k = 3 .. 7, side the
@@ -43,10 +43,10 @@ struct FidelityOptions {
   int lattice = 72;             // nodes per axis, in [8, 512]
   double extend = 0.2;          // growth of B on every side, as a fraction of its side
   JuliaOptions julia;           // the n-step field (iterations 0: skip it)
-  bool reference_frame = false;  // the n-step set iterated in the reference frame (ReferenceFrame)
+  IterationFrame frame = IterationFrame::kMap;  // the frame the n-step set is iterated in
   double detail = kSmoothDetail;  // ... of the map with this detail (WithDetail)
   // The map as iterated when the caller made it already (MakeJuliaSetup, quijibo/julia_setup.h):
-  // then reference_frame and detail are its, not read here.
+  // then frame and detail are its, not read here.
   std::shared_ptr<const RationalMap> iterated;
   int closing = 2;              // closed IoU: half side of the closing's cube, lattice cells, in [0, 16]
   double iso = 0.0;

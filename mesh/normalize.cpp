@@ -26,14 +26,6 @@ FractalFrame NormalizationFor(const TriangleMesh& mesh, double padding, double f
   return frame;
 }
 
-OriginPlacement ParseOriginPlacement(const std::string& name) {
-  if (name == "center") return OriginPlacement::kCenter;
-  if (name == "inside") return OriginPlacement::kInside;
-  throw Error("unknown origin placement \"" + name + "\" (expected center or inside)");
-}
-
-std::string OriginPlacementName(OriginPlacement p) { return p == OriginPlacement::kCenter ? "center" : "inside"; }
-
 FractalFrame PlaceOriginInside(const TriangleMesh& user_mesh, FractalFrame frame, const std::string& name,
                                int resolution) {
   SdfOptions o;
@@ -47,14 +39,6 @@ FractalFrame PlaceOriginInside(const TriangleMesh& user_mesh, FractalFrame frame
   for (int a = 0; a < 3; ++a) frame.origin[a] = w[a] / frame.fractal_radius + frame.origin[a];
   return frame;
 }
-
-FrameScale ParseFrameScale(const std::string& name) {
-  if (name == "trap") return FrameScale::kTrap;
-  if (name == "fixed") return FrameScale::kFixed;
-  throw Error("unknown frame scale \"" + name + "\" (expected trap or fixed)");
-}
-
-std::string FrameScaleName(FrameScale s) { return s == FrameScale::kTrap ? "trap" : "fixed"; }
 
 FractalFrame ScaleToTrap(const TriangleMesh& user_mesh, FractalFrame frame, const std::string& name,
                          double max_fractal_radius) {

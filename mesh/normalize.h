@@ -3,6 +3,7 @@
 
 #include "mesh/triangle_mesh.h"
 #include "quijibo/frame.h"
+#include "util/settings.h"
 
 #include <string>
 
@@ -23,8 +24,10 @@ enum class OriginPlacement {
   kCenter,  // the centre of the unit cube (the mesh's bounding box): the reference code
   kInside,  // the point deepest inside the shape, where the iteration's trap belongs
 };
-OriginPlacement ParseOriginPlacement(const std::string& name);  // "center" or "inside"
-std::string OriginPlacementName(OriginPlacement p);
+inline const EnumNames<OriginPlacement> kOriginPlacements("origin placement", {{OriginPlacement::kCenter, "center"},
+                                                                             {OriginPlacement::kInside, "inside"}});
+inline OriginPlacement ParseOriginPlacement(const std::string& name) { return kOriginPlacements.Parse(name); }
+inline std::string OriginPlacementName(OriginPlacement p) { return kOriginPlacements.Name(p); }
 
 // `frame` with its origin moved to the point deepest inside `user_mesh`: the cell centre with the
 // most negative signed distance (the first in x-fastest order on ties) on a `resolution`^3 grid
@@ -37,8 +40,9 @@ enum class FrameScale {
   kFixed,  // w = fractal_radius (p - origin), fractal_radius as given (4: the reference code)
   kTrap,   // the ball of radius 1 about the origin just fits inside the shape (ScaleToTrap)
 };
-FrameScale ParseFrameScale(const std::string& name);  // "trap" or "fixed"
-std::string FrameScaleName(FrameScale s);
+inline const EnumNames<FrameScale> kFrameScales("frame scale", {{FrameScale::kTrap, "trap"}, {FrameScale::kFixed, "fixed"}});
+inline FrameScale ParseFrameScale(const std::string& name) { return kFrameScales.Parse(name); }
+inline std::string FrameScaleName(FrameScale s) { return kFrameScales.Name(s); }
 
 // `frame` with fractal_radius chosen so that the ball of radius 1 about the fractal origin touches
 // the surface of `user_mesh`: fractal_radius / depth, where depth is the distance from the origin to

@@ -6,7 +6,7 @@
 #include <map>
 
 #include "mesh/sdf.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "util/error.h"
 #include "util/io.h"
 #include "util/json_reader.h"
@@ -61,6 +61,12 @@ LoadedTarget LoadModulusTarget(const std::string& spec, int sdf_resolution) {
     const std::string frame_path = FrameJsonPathFor(spec);
     const bool have_frame = std::filesystem::exists(frame_path);
     if (have_frame) f = ReadFrameJson(frame_path);
+    // The unit frame is centred on the box: a grid whose fractal origin was placed inside the shape
+    // (`quijibo sdf --origin inside`, a run's target.qgrid) would be read shifted.
+    if (!f.default_origin())
+      throw Error(spec + ": its frame (" + frame_path + ") places the fractal origin inside the shape; the shape "
+                  "modulus and portals need the box centre: make the grid with `quijibo sdf --origin center`, or give "
+                  "the mesh itself");
     t.target = ModulusTargetFromGrid(t.grid, f.fractal_radius, f.padding, &t.unit_per_grid);
     t.unit_per_source = t.unit_per_grid;
     t.info = {{"kind", "qgrid"},

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "mesh/triangle_mesh.h"
+#include "util/settings.h"
 #include "quijibo/grid.h"
 #include "methods/mask.h"
 #include "methods/modulus.h"
@@ -17,6 +18,17 @@ namespace quijibo::mesh {
 
 // .obj, .ply, .stl or .off (any case).
 bool IsMeshFile(const std::string& path);
+
+// The cells of a mesh's SDF in the unit frame (UnitFrameMeshSdf), a setting of the shape modulus'
+// and the portals' stages, defined once: Schema<O>().With(UnitSdfResolutionSetting(ref)).
+inline constexpr int kDefaultUnitSdfResolution = 100;  // the 2023 code's sdfGen resolution
+template <class Ref>
+auto UnitSdfResolutionSetting(Ref ref) {
+  return [ref]<class O>(Schema<O>& s) {
+    s.Integer("sdf_resolution", "--sdf-resolution", "Mesh targets and SDF masks: SDF cells on [-0.5,0.5]^3", ref, 8,
+              2048);
+  };
+}
 
 // A mesh in the unit frame and its signed distance on the cube [-0.5, 0.5]^3 at `sdf_resolution`
 // cells; the unit-frame mesh, the scale and the bounding box's centre go to the pointers given.

@@ -10,14 +10,6 @@
 
 namespace quijibo::monopole {
 
-StartScan ParseStartScan(const std::string& name) {
-  if (name == "iou") return StartScan::kIou;
-  if (name == "reference") return StartScan::kReference;
-  throw Error("unknown start scan \"" + name + "\" (expected iou or reference)");
-}
-
-std::string StartScanName(StartScan s) { return s == StartScan::kIou ? "iou" : "reference"; }
-
 std::string InitialGuessOptions::Validate() const {
   if (!(amplitude > 0) || !std::isfinite(amplitude)) return "amplitude must be a positive number";
   if (auto why = CheckRange("scan_resolution", SettingType::kInteger, scan_resolution, kScanResolutionRange);

@@ -34,9 +34,10 @@ enum class StartScan {
   // The reference's 1-D scan of ln C at the given amplitude (the header's comment).
   kReference,
 };
-inline const std::vector<std::string> kStartScanNames = {"iou", "reference"};
-StartScan ParseStartScan(const std::string& name);  // iou|reference
-std::string StartScanName(StartScan s);
+inline const EnumNames<StartScan> kStartScans("start scan", {{StartScan::kIou, "iou"}, {StartScan::kReference, "reference"}});
+inline const std::vector<std::string>& kStartScanNames = kStartScans.names();
+inline StartScan ParseStartScan(const std::string& name) { return kStartScans.Parse(name); }
+inline std::string StartScanName(StartScan s) { return kStartScans.Name(s); }
 
 struct InitialGuessOptions {
   // The "initial bulk scalar amplitude". The reference runs 3000 (its cfg comments: 50 "reliable",

@@ -70,7 +70,7 @@ struct KernelFitOptions {
   // most 4000): walls a few cells thick need denser pairs than the rule's 2.5 sizes to be
   // shaped at all (the chair: start IoU 0.75 -> 0.82; docs/fidelity.md §9). kAuto decides from
   // the target; the other kinds of target keep the rule as set.
-  ThinWallSwitch thin_walls = ThinWallSwitch::kAuto;
+  AutoSwitch thin_walls = AutoSwitch::kAuto;
   static constexpr double kThinWallSpacing = 0.6;
   std::uint64_t seed = 1;      // blue-noise sampling of the surface
   std::string Validate() const;

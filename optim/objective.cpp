@@ -19,10 +19,17 @@ struct Objective::Impl {
 
 namespace {
 
-// The run's loglinear options for `evaluator`, as Optimize sets them up (optimizer.cpp).
-LogLinearOptions RunLogLinearOptions(const OptimizeOptions& o, const std::string& evaluator,
-                                     const ScalarGrid& target) {
-  return o.loglinear(evaluator, ThinWallsOn(o.between_nodes, target));
+// Whether the corners are fitted and the run's loglinear options for `evaluator`, as Optimize sets
+// them up (optimizer.cpp); the target's wall depth is measured once.
+struct RunChoices {
+  bool between_nodes = false;
+  LogLinearOptions loglinear;
+};
+RunChoices MakeRunChoices(const OptimizeOptions& o, const std::string& evaluator, const ScalarGrid& target) {
+  RunChoices c;
+  c.between_nodes = ThinWallsOn(o.between_nodes, target);
+  c.loglinear = o.loglinear(evaluator, c.between_nodes);
+  return c;
 }
 
 template <class Scalar>
@@ -30,12 +37,15 @@ struct ObjectiveIn : Objective::Impl {
   using Vector = Eigen::Matrix<Scalar, -1, 1>;
   ObjectiveIn(const ScalarGrid& target, const RationalMap& map, const OptimizeOptions& o, int scheduled,
               const std::string& name)
-      : weights(target, o.weights, map, o.energy, RunLogLinearOptions(o, name, target), ThinWallsOn(o.between_nodes, target)),
+      : ObjectiveIn(target, map, o, scheduled, name, MakeRunChoices(o, name, target)) {}
+  ObjectiveIn(const ScalarGrid& target, const RationalMap& map, const OptimizeOptions& o, int scheduled,
+              const std::string& name, const RunChoices& run)
+      : weights(target, o.weights, map, o.energy, run.loglinear, run.between_nodes),
         level(weights, map,
               scheduled <= 0 ? 0
                              : ResolvedLevelResolution(target, weights.finest_weight(), o.weights, scheduled,
                                                        o.level_weights, o.min_level_fidelity),
-              o.level_weights, name, o.energy, RunLogLinearOptions(o, name, target)) {
+              o.level_weights, name, o.energy, run.loglinear) {
     resolution = level.resolution();
     evaluator = name;
     const Vector x = map.variables().cast<Scalar>();

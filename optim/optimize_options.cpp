@@ -12,32 +12,6 @@ namespace quijibo::optim {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
-OptimizeOptions::LevelStart ParseLevelStart(const std::string& name) {
-  if (name == "best") return OptimizeOptions::LevelStart::kBest;
-  if (name == "last") return OptimizeOptions::LevelStart::kLast;
-  throw Error("unknown level start \"" + name + "\" (expected best or last)");
-}
-
-std::string LevelStartName(OptimizeOptions::LevelStart s) {
-  return s == OptimizeOptions::LevelStart::kBest ? "best" : "last";
-}
-
-OptimizeOptions::Keep ParseKeep(const std::string& name) {
-  if (name == "iou") return OptimizeOptions::Keep::kIou;
-  if (name == "lowest-psi") return OptimizeOptions::Keep::kLowestPsi;
-  throw Error("unknown keep \"" + name + "\" (expected iou or lowest-psi)");
-}
-
-std::string KeepName(OptimizeOptions::Keep k) { return k == OptimizeOptions::Keep::kIou ? "iou" : "lowest-psi"; }
-
-LevelWeights ParseLevelWeights(const std::string& name) {
-  if (name == "sample") return LevelWeights::kSampleFinest;
-  if (name == "recompute") return LevelWeights::kRecompute;
-  throw Error("unknown level weights \"" + name + "\" (expected sample or recompute)");
-}
-
-std::string LevelWeightsName(LevelWeights w) { return w == LevelWeights::kSampleFinest ? "sample" : "recompute"; }
-
 std::string ResolveEvaluator(const std::string& name, Precision precision) {
   if (name == "auto") return precision == Precision::kDouble ? "band" : "cached";
   if (name == "loglinear") return "dense";
@@ -100,28 +74,14 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
           .Doc("`auto`: the narrow band in double, `cached` in other precisions; `band`: the log-linear evaluator "
                "on its narrow band (same ψ and gradient as dense, bit for bit; docs/architecture.md); `dense` "
                "(older name `loglinear`): log-linear on every cell (double only); `cached`: the paper's evaluator")
-          .Enum(
-              "precision", "-p,--precision", "float, double, long-double, float128 (cached)", kPrecisionNames,
-              [](const O& o) { return PrecisionName(o.precision); },
-              [](O& o, const std::string& v) { o.precision = ParsePrecision(v); })
-          .Doc("evaluator precision (`cached` for anything but double)")
-          .Enum(
-              "weights", "-w,--weights", "layer (reference), inverse (paper) or balanced (quijibo/target.h)",
-              kWeightNames, [](const O& o) { return WeightFieldName(o.weights); },
-              [](O& o, const std::string& v) { o.weights = ParseWeightField(v); })
-          .Doc("weight field: layer weights where a misclassified cell costs the same inside and outside (as the "
-               "IoU counts it; `balanced`), the reference code's layer weights (inside and outside each normalized "
-               "to 0.5; `layer`), or the paper's 1/phi (`inverse`) ([fidelity.md](fidelity.md))")
-          .Enum(
-              "level_weights", "--level-weights", "sample or recompute", kLevelWeightNames,
-              [](const O& o) { return LevelWeightsName(o.level_weights); },
-              [](O& o, const std::string& v) { o.level_weights = ParseLevelWeights(v); })
-          .Doc("coarse-level weights: the finest level's sampled (the reference), or recomputed on the level")
+          .With(PrecisionSetting([](auto& o) -> Precision& { return o.precision; }))
+          .With(WeightsSetting([](auto& o) -> WeightField& { return o.weights; }))
+          .With(LevelWeightsSetting([](auto& o) -> LevelWeights& { return o.level_weights; }))
           .Enum(
               "level_start", "--level-start",
               "best: each level after the first starts from the map with the lowest absolute energy so far; "
               "last: from the last pass's map (the paper, the reference code)",
-              kLevelStartNames, [](const O& o) { return LevelStartName(o.level_start); },
+              kLevelStarts.names(), [](const O& o) { return LevelStartName(o.level_start); },
               [](O& o, const std::string& v) { o.level_start = ParseLevelStart(v); })
           .Doc("where each level after the first starts: the last pass's map (the paper and reference), or the "
                "map with the lowest absolute energy so far ([fidelity.md](fidelity.md) §5)")
@@ -138,8 +98,8 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
               "Also fit every level's cell corners (a staggered twin of its grid), so thin walls cannot pass "
               "through the nodes and narrow between them; about twice the work: on, auto (only on a thin-walled "
               "target) or off (the paper's energy)",
-              kThinWallSwitchNames, [](const O& o) { return ThinWallSwitchName(o.between_nodes); },
-              [](O& o, const std::string& v) { o.between_nodes = ParseThinWallSwitch(v); })
+              kAutoSwitchNames, [](const O& o) { return AutoSwitchName(o.between_nodes); },
+              [](O& o, const std::string& v) { o.between_nodes = ParseAutoSwitch(v); })
           .Doc("the energy also on every level's interior cell corners, a staggered twin of its grid (ψ is the sum "
                "over both): a fit whose walls two or three cells thin pass through the nodes and narrow between "
                "them pays for it, and on thick shapes it is what makes the optimized volume at least the start's; "
@@ -149,7 +109,7 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
               "keep", "--keep",
               "Which map the run returns: iou (the lowest absolute energy among the maps whose one-step IoU on the "
               "target grid is at least the start's) or lowest-psi (the lowest absolute energy)",
-              kKeepNames, [](const O& o) { return KeepName(o.keep); },
+              kKeeps.names(), [](const O& o) { return KeepName(o.keep); },
               [](O& o, const std::string& v) { o.keep = ParseKeep(v); })
           .Doc("the map the run returns: `iou`, the lowest absolute energy among the start and the pass ends whose "
                "one-step IoU on the target grid is at least the start's (the result never fits worse than the start "
@@ -160,18 +120,10 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
               [](auto& o) -> double& { return o.iou_tolerance; }, 0, 1)
           .Doc("a pass whose one-step IoU on the target grid ends more than this below its start's is flagged in the "
                "pass table, summary.json (`iou_loss`) and the log")
-          .Number(
-              "alpha", "--alpha", "Sharpness of tanh", [](auto& o) -> double& { return o.energy.alpha; },
-              EnergyOptions::kAlphaRange)
+          .With(AlphaSetting([](auto& o) -> double& { return o.energy.alpha; }))
           .Integer(
               "memory", "--memory", "L-BFGS correction pairs", [](auto& o) -> int& { return o.memory; }, 1, 100)
-          .Enum(
-              "storage", "--storage", "loglinear log-distance storage: auto, double, float, on-the-fly", kStorageNames,
-              [](const O& o) { return StorageName(o.storage); },
-              [](O& o, const std::string& v) { o.storage = ParseStorage(v); })
-          .Doc("log-linear log-distance storage; `on-the-fly` (what `auto` picks when the matrix exceeds the "
-               "budget) keeps the rows of the cells near the surface in a cache of up to half the budget, and the "
-               "band anchors on blocks")
+          .With(StorageSetting([](auto& o) -> LogLinearOptions::Storage& { return o.storage; }))
           .Number(
               "memory_budget_gb", "--memory-budget",
               "GB the finest level's log-distance matrix may take with storage auto (else on the fly, ~5x slower); "
@@ -211,6 +163,14 @@ json OptimizeOptions::ToJson() const {
   return j;
 }
 
+Schedule OptimizeOptions::ScheduleFromString(const std::string& s, const fs::path& base) const {
+  if (!s.ends_with(".json")) return ScheduleFromNotation(s);
+  const std::string file = ResolvePath(base, s);
+  if (!fs::is_regular_file(file)) throw Error("no such schedule file: " + file);
+  const json doc = ParseJson(ReadFile(file), file);
+  return Schedule::FromJson(JsonReader(doc, file), "");
+}
+
 OptimizeOptions OptimizeOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
                                           const std::vector<std::string>& extra_keys) {
   if (!r.at(p).is_object()) r.fail(p, "expected an object, found " + JsonReader::describe(r.at(p)));
@@ -231,13 +191,11 @@ OptimizeOptions OptimizeOptions::FromJson(const JsonReader& r, const std::string
       const std::string s = node.get<std::string>();
       if (s.find_first_not_of(" \t") == std::string::npos) r.fail(sp, "expected a schedule, found an empty string");
       if (s.ends_with(".json")) {
-        const std::string file = ResolvePath(base, s);
-        if (!fs::is_regular_file(file)) r.fail(sp, "no such schedule file: " + file);
-        const json doc = ParseJson(ReadFile(file), file);
-        o.schedule = Schedule::FromJson(JsonReader(doc, file), "");
+        if (!fs::is_regular_file(ResolvePath(base, s))) r.fail(sp, "no such schedule file: " + ResolvePath(base, s));
+        o.schedule = o.ScheduleFromString(s, base);  // a file's errors name the file
       } else {
         try {
-          o.schedule = o.ScheduleFromNotation(s);
+          o.schedule = o.ScheduleFromString(s, base);
         } catch (const Error& e) {
           r.fail(sp, e.what());
         }

@@ -21,6 +21,7 @@
 #include "optim/run_state.h"
 #include "util/error.h"
 #include "util/io.h"
+#include "util/signals.h"
 
 namespace quijibo::optim {
 
@@ -37,7 +38,7 @@ json OptimizeSummary::ToJson(const OptimizeOptions& o) const {
           {"weights", WeightFieldName(o.weights)},
           {"level_weights", LevelWeightsName(o.level_weights)},
           {"level_start", LevelStartName(o.level_start)}, {"min_level_fidelity", o.min_level_fidelity},
-          {"between_nodes", ThinWallSwitchName(o.between_nodes)}, {"between_nodes_on", between_nodes},
+          {"between_nodes", AutoSwitchName(o.between_nodes)}, {"between_nodes_on", between_nodes},
           {"keep", KeepName(o.keep)}, {"iou_tolerance", o.iou_tolerance}, {"iou_start", iou_start},
           {"iou_end", iou_end}, {"lowest_psi_pass", lowest_psi_pass}, {"lowest_psi", lowest_psi},
           {"levels", levels_json},
@@ -127,24 +128,13 @@ long long TestSignalStep() {
 volatile std::sig_atomic_t g_interrupted = 0;
 extern "C" void OnSignal(int sig) { g_interrupted = sig; }  // the signal: never 0
 
-// Installs the SIGINT/SIGTERM handlers for the life of the optimization.
+// The SIGINT/SIGTERM handlers for the life of the optimization.
 class SignalGuard {
  public:
-  SignalGuard() {
-    g_interrupted = 0;
-    struct sigaction sa {};
-    sa.sa_handler = OnSignal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int_);
-    sigaction(SIGTERM, &sa, &old_term_);
-  }
-  ~SignalGuard() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
+  SignalGuard() : guard_((g_interrupted = 0, OnSignal)) {}
 
  private:
-  struct sigaction old_int_ {}, old_term_ {};
+  InterruptGuard guard_;
 };
 
 // One optimization run (optimizer.h): Run walks the schedule, RunLevel one level, RunPass one

@@ -89,7 +89,7 @@ struct OptimizeOptions {
   // thick shapes a fit of the nodes alone can leave the volume between them as it was or worse
   // (fidelity.md §11). About twice the work of a pass and of the absolute energy; kAuto: only on
   // a thin-walled target (quijibo/target.h); kOff: the paper's energy, on the nodes.
-  ThinWallSwitch between_nodes = ThinWallSwitch::kOn;
+  AutoSwitch between_nodes = AutoSwitch::kOn;
   // Which map the run returns. kIou: the lowest absolute energy among the start and the pass ends
   // whose one-step IoU on the target grid is at least the start's, so the result never fits the
   // target worse than the start by that measure (a poor start can slide towards an empty set while
@@ -117,12 +117,6 @@ struct OptimizeOptions {
 
   // The names each choice accepts, in the order messages list them.
   inline static const std::vector<std::string> kBackendNames = {"lbfgspp", "ceres"};
-  inline static const std::vector<std::string> kPrecisionNames = {"float", "double", "long-double", "float128"};
-  inline static const std::vector<std::string> kWeightNames = {"layer", "inverse", "balanced"};
-  inline static const std::vector<std::string> kLevelWeightNames = {"sample", "recompute"};
-  inline static const std::vector<std::string> kLevelStartNames = {"best", "last"};
-  inline static const std::vector<std::string> kKeepNames = {"iou", "lowest-psi"};
-  inline static const std::vector<std::string> kStorageNames = {"auto", "double", "float", "on-the-fly"};
 
   static const Schema<OptimizeOptions>& Settings();
   // "" or the first problem, naming the setting and its range.
@@ -131,6 +125,10 @@ struct OptimizeOptions {
   std::vector<PassSpec> PassDefaults() const;
   // `notation` ("25(VFRF)50(VF)") with PassDefaults(); throws quijibo::Error on bad notation.
   Schedule ScheduleFromNotation(const std::string& notation) const;
+  // A schedule given as a string, as `"schedule"` and `quijibo optimize --schedule` take it: the path
+  // of a .json schedule file (relative to `base`; it sets its own caps) or the notation (with this
+  // struct's caps and tolerance). Throws quijibo::Error naming the file or the notation's problem.
+  Schedule ScheduleFromString(const std::string& notation_or_file, const std::filesystem::path& base) const;
   // The log-linear evaluators' options for a run with `evaluator` (read through a band unless
   // "dense"): the storage, and the budget in bytes, shared by the nodes' and the corners'
   // evaluators when `between_nodes_on`, so that fitting the corners takes no more memory.
@@ -147,12 +145,67 @@ struct OptimizeOptions {
                                   const std::filesystem::path& base, const std::vector<std::string>& extra_keys = {});
 };
 
-OptimizeOptions::LevelStart ParseLevelStart(const std::string& name);  // best|last
-OptimizeOptions::Keep ParseKeep(const std::string& name);              // iou|lowest-psi
-std::string KeepName(OptimizeOptions::Keep k);
-std::string LevelStartName(OptimizeOptions::LevelStart s);
-std::string LevelWeightsName(LevelWeights w);                          // sample|recompute
-LevelWeights ParseLevelWeights(const std::string& name);
+inline const EnumNames<OptimizeOptions::LevelStart> kLevelStarts("level start",
+                                                                 {{OptimizeOptions::LevelStart::kBest, "best"},
+                                                                  {OptimizeOptions::LevelStart::kLast, "last"}});
+inline const EnumNames<OptimizeOptions::Keep> kKeeps("keep", {{OptimizeOptions::Keep::kIou, "iou"},
+                                                             {OptimizeOptions::Keep::kLowestPsi, "lowest-psi"}});
+inline OptimizeOptions::LevelStart ParseLevelStart(const std::string& name) { return kLevelStarts.Parse(name); }
+inline OptimizeOptions::Keep ParseKeep(const std::string& name) { return kKeeps.Parse(name); }
+inline std::string KeepName(OptimizeOptions::Keep k) { return kKeeps.Name(k); }
+inline std::string LevelStartName(OptimizeOptions::LevelStart s) { return kLevelStarts.Name(s); }
+
+// The evaluator's settings, which the optimizer and the energy stage (`quijibo energy`) share: each
+// defined once here, bound to a member of the struct that holds it, as
+// Schema<O>().With(optim::PrecisionSetting([](auto& o) -> Precision& { return o.precision; })).
+template <class Ref>
+auto AlphaSetting(Ref ref) {
+  return [ref]<class O>(Schema<O>& s) { s.Number("alpha", "--alpha", "Sharpness of tanh", ref, EnergyOptions::kAlphaRange); };
+}
+template <class Ref>
+auto PrecisionSetting(Ref ref) {
+  return [ref]<class O>(Schema<O>& s) {
+    s.Enum(
+         "precision", "-p,--precision", "float, double, long-double or float128 (the cached evaluator)",
+         kPrecisionNames, [ref](const O& o) { return PrecisionName(ref(const_cast<O&>(o))); },
+         [ref](O& o, const std::string& v) { ref(o) = ParsePrecision(v); })
+        .Doc("evaluator precision (`cached` for anything but double)");
+  };
+}
+template <class Ref>
+auto WeightsSetting(Ref ref) {
+  return [ref]<class O>(Schema<O>& s) {
+    s.Enum(
+         "weights", "-w,--weights", "Weight field: balanced (the default), layer (reference code) or inverse (paper, 1/phi)",
+         kWeightFieldNames, [ref](const O& o) { return WeightFieldName(ref(const_cast<O&>(o))); },
+         [ref](O& o, const std::string& v) { ref(o) = ParseWeightField(v); })
+        .Doc("weight field: layer weights where a misclassified cell costs the same inside and outside (as the "
+             "IoU counts it; `balanced`), the reference code's layer weights (inside and outside each normalized "
+             "to 0.5; `layer`), or the paper's 1/phi (`inverse`) ([fidelity.md](fidelity.md))");
+  };
+}
+template <class Ref>
+auto LevelWeightsSetting(Ref ref) {
+  return [ref]<class O>(Schema<O>& s) {
+    s.Enum(
+         "level_weights", "--level-weights", "Coarse-level weights: sample (the finest W, as the reference) or recompute",
+         kLevelWeightNames, [ref](const O& o) { return LevelWeightsName(ref(const_cast<O&>(o))); },
+         [ref](O& o, const std::string& v) { ref(o) = ParseLevelWeights(v); })
+        .Doc("coarse-level weights: the finest level's sampled (the reference), or recomputed on the level");
+  };
+}
+template <class Ref>
+auto StorageSetting(Ref ref) {
+  return [ref]<class O>(Schema<O>& s) {
+    s.Enum(
+         "storage", "--storage", "loglinear log-distance storage: auto, double, float, on-the-fly", kStorageNames,
+         [ref](const O& o) { return StorageName(ref(const_cast<O&>(o))); },
+         [ref](O& o, const std::string& v) { ref(o) = ParseStorage(v); })
+        .Doc("log-linear log-distance storage; `on-the-fly` (what `auto` picks when the matrix exceeds the "
+             "budget) keeps the rows of the cells near the surface in a cache of up to half the budget, and the "
+             "band anchors on blocks");
+  };
+}
 
 struct OptimizeSummary {
   std::vector<PassSummary> passes;

@@ -54,13 +54,6 @@ std::string FractalFrame::Validate() const {
   return {};
 }
 
-TargetBox ParseTargetBox(const std::string& name) {
-  if (name == "unit") return TargetBox::kUnitCube;
-  if (name == "reference") return TargetBox::kReference;
-  throw Error("unknown target box \"" + name + "\" (expected unit or reference)");
-}
-
-std::string TargetBoxName(TargetBox box) { return box == TargetBox::kUnitCube ? "unit" : "reference"; }
 
 GridFrame TargetGridFrame(int n, const FractalFrame& frame, TargetBox box) {
   const double side = box == TargetBox::kUnitCube

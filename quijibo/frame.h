@@ -71,8 +71,10 @@ enum class TargetBox {
   // leaks (docs/benchmarks.md, shape suite). Analytic targets keep this box.
   kReference,
 };
-TargetBox ParseTargetBox(const std::string& name);  // "unit" or "reference"
-std::string TargetBoxName(TargetBox box);
+inline const EnumNames<TargetBox> kTargetBoxes("target box", {{TargetBox::kUnitCube, "unit"},
+                                                             {TargetBox::kReference, "reference"}});
+inline TargetBox ParseTargetBox(const std::string& name) { return kTargetBoxes.Parse(name); }
+inline std::string TargetBoxName(TargetBox box) { return kTargetBoxes.Name(box); }
 
 // Cells per axis of the target grid: the paper's 97, and the range every command, experiment and
 // the Python module accept (the grid costs n^3 cells; its log-distance matrix n^3 per root).

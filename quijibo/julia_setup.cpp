@@ -33,7 +33,7 @@ Vec4 ResolveRootTranslation(const RationalMap& iterated, const JuliaSetupOptions
 JuliaSetup MakeJuliaSetup(const RationalMap& input, const JuliaSetupOptions& o) {
   if (auto why = o.Validate(); !why.empty()) throw Error(why);
   JuliaSetup s;
-  s.map = IterationMap(input, o.reference_frame, o.detail, &s.lambda);
+  s.map = IterationMap(input, o.frame, o.detail, &s.lambda);
   const double half = s.map.frame.fractal_radius / 2;
   const Vec3 c = s.map.frame.box_center();
   for (int a = 0; a < 3; ++a) {

@@ -2,7 +2,7 @@
 // (frame, detail, root translation, box, rotation, n, escape), for the mesh stage, the fidelity
 // measures, the pictures and every face that meshes (the command line, MPI, Python).
 //
-// The n-step set is that of IterationMap(map, reference_frame, detail) (rational_map.h), with the
+// The n-step set is that of IterationMap(map, frame, detail) (rational_map.h), with the
 // root translation given (`translate`) or chosen by the potential it leaves at -t
 // (`translate_potential`, TranslationForPotential), sampled over `box` (default: the map's
 // normalized cube in the iteration frame) turned by `rotation` about the box's centre.
@@ -19,7 +19,7 @@ namespace quijibo {
 
 struct JuliaSetupOptions {
   JuliaOptions julia;             // n, escape and capture radius, slice, root scale; its translation when none below
-  bool reference_frame = false;   // iterate in ReferenceFrame (the paper's translations are given there)
+  IterationFrame frame = IterationFrame::kMap;  // kReference: where the paper's translations are given
   double detail = kSmoothDetail;  // WithDetail's band width, percent of the shape's size; 0: as optimized
   std::optional<std::vector<double>> translate;  // x, y, z[, k]; with translate_potential: its direction
   std::optional<double> translate_potential;     // L = log|R| wanted at -t, in [-1000, 0)

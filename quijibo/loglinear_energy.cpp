@@ -67,24 +67,6 @@ std::string LogLinearOptions::Validate() const {
   return {};
 }
 
-Storage ParseStorage(const std::string& name) {
-  if (name == "auto") return Storage::kAuto;
-  if (name == "double") return Storage::kDouble;
-  if (name == "float") return Storage::kFloat;
-  if (name == "on-the-fly" || name == "none") return Storage::kOnTheFly;
-  throw Error("unknown log-distance storage \"" + name + "\": expected auto, double, float or on-the-fly");
-}
-
-std::string StorageName(Storage s) {
-  switch (s) {
-    case Storage::kAuto: return "auto";
-    case Storage::kDouble: return "double";
-    case Storage::kFloat: return "float";
-    case Storage::kOnTheFly: return "on-the-fly";
-  }
-  return "?";
-}
-
 LogLinearEnergy::LogLinearEnergy(const RationalMap& map, const EnergyGrid& grid,
                                  const EnergyOptions& options, const LogLinearOptions& loglinear)
     : frame_(grid.frame), slice_(grid.slice), eta_(grid.eta), options_(options), storage_(loglinear.storage) {

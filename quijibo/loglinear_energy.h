@@ -27,6 +27,7 @@
 
 #include "quijibo/energy.h"
 #include "quijibo/loglinear_kernel.h"
+#include "util/settings.h"
 
 namespace quijibo {
 
@@ -48,8 +49,15 @@ struct LogLinearOptions {
   int sharing = 1;
   std::string Validate() const;
 };
-LogLinearOptions::Storage ParseStorage(const std::string& name);  // auto|double|float|on-the-fly
-std::string StorageName(LogLinearOptions::Storage s);
+inline const EnumNames<LogLinearOptions::Storage> kStorages("log-distance storage",
+                                                            {{LogLinearOptions::Storage::kAuto, "auto"},
+                                                             {LogLinearOptions::Storage::kDouble, "double"},
+                                                             {LogLinearOptions::Storage::kFloat, "float"},
+                                                             {LogLinearOptions::Storage::kOnTheFly, "on-the-fly"}},
+                                                            {{LogLinearOptions::Storage::kOnTheFly, "none"}});
+inline const std::vector<std::string>& kStorageNames = kStorages.names();
+inline LogLinearOptions::Storage ParseStorage(const std::string& name) { return kStorages.Parse(name); }
+inline std::string StorageName(LogLinearOptions::Storage s) { return kStorages.Name(s); }
 
 class LogLinearEnergy {
  public:

@@ -191,10 +191,10 @@ FractalFrame ReferenceFrame(const FractalFrame& frame) {
   return f;
 }
 
-RationalMap IterationMap(const RationalMap& map, bool reference_frame, double detail, double* lambda) {
+RationalMap IterationMap(const RationalMap& map, IterationFrame frame, double detail, double* lambda) {
   if (lambda) *lambda = 1.0;
   RationalMap m = detail == 0.0 ? map : WithDetail(map, detail, lambda);
-  return reference_frame ? InFrame(m, ReferenceFrame(m.frame)) : m;
+  return frame == IterationFrame::kReference ? InFrame(m, ReferenceFrame(m.frame)) : m;
 }
 
 double SurfaceSteepness(const RationalMap& map, int lattice) {
@@ -259,8 +259,9 @@ RationalMap WithDetail(const RationalMap& map, double detail, double* lambda) {
 Vec4 TranslationForPotential(const RationalMap& iterated, const Vec3& direction, double potential) {
   const double norm = std::sqrt(direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2]);
   if (!std::isfinite(norm) || !(norm > 0)) throw Error("translation by potential: the direction must be finite and non-zero");
-  if (!(potential >= -1000.0 && potential < 0.0))
-    throw Error("translation by potential: the potential must be in [-1000, 0), got " + std::to_string(potential));
+  if (const std::string why = CheckRange("potential", SettingType::kNumber, potential, kTranslatePotentialRange);
+      !why.empty())
+    throw Error("translation by potential: " + why);
   const Vec3 u{direction[0] / norm, direction[1] / norm, direction[2] / norm};
   auto L = [&](double s) {
     const double v = OneStepLogModulus(iterated, Vec3{-s * u[0], -s * u[1], -s * u[2]});

@@ -25,6 +25,7 @@
 
 #include "quijibo/frame.h"
 #include "quijibo/quaternion.h"
+#include "util/settings.h"
 
 namespace quijibo {
 
@@ -97,10 +98,19 @@ inline double OneStepLogModulus(const RationalMap& m, const Vec3& p, double slic
 // translation, padding) differs from the map's.
 RationalMap InFrame(const RationalMap& map, const FractalFrame& to);
 
+// The frame a map is iterated in: its own (as optimized), or the reference code's (ReferenceFrame),
+// where the paper's root translations are given.
+enum class IterationFrame { kMap, kReference };
+inline const EnumNames<IterationFrame> kIterationFrames("iteration frame", {{IterationFrame::kMap, "map"},
+                                                                          {IterationFrame::kReference, "reference"}});
+inline const std::vector<std::string>& kIterationFrameNames = kIterationFrames.names();
+inline IterationFrame ParseIterationFrame(const std::string& name) { return kIterationFrames.Parse(name); }
+inline std::string IterationFrameName(IterationFrame frame) { return kIterationFrames.Name(frame); }
+
 // The map as the mesh stage and the fidelity measures iterate it: WithDetail(map, detail), then in
-// ReferenceFrame when `reference_frame`; `map` itself when detail is 0 and the frame the map's.
-// `lambda` (optional) receives WithDetail's factor (1 for detail 0).
-RationalMap IterationMap(const RationalMap& map, bool reference_frame, double detail, double* lambda = nullptr);
+// ReferenceFrame with IterationFrame::kReference; `map` itself when detail is 0 and the frame the
+// map's. `lambda` (optional) receives WithDetail's factor (1 for detail 0).
+RationalMap IterationMap(const RationalMap& map, IterationFrame frame, double detail, double* lambda = nullptr);
 
 // The reference code's world frame for a map's normalization (quijibo-code.md §2): the origin at
 // the centre of the mesh's bounding box and the longest side 3 units (fractal radius 4 with the
@@ -140,13 +150,15 @@ inline constexpr double kSmoothDetail = 0.25;
 // surface grows intricate, as the Julia set of q^2 + c does for c near the Mandelbrot set's edge.
 // Inputs: `iterated` the map as it is iterated (IterationMap: its detail and frame), `direction`
 // the translation's direction in that frame (x, y, z; its length is ignored), `potential` the
-// L = log|R| wanted at -t, in [-1000, 0).
+// L = log|R| wanted at -t, in kTranslatePotentialRange.
 // Returns t = s u (k = 0), u = direction / |direction|, s the smallest s > 0 with
 // L(-s u) = potential (a march of 1/2048 of the shape box's side, then bisection), -s u on the
 // ray from the frame's origin. Throws quijibo::Error when the direction is zero or not finite, the
 // potential is out of range, L at the origin is not below `potential` (the ray must start inside
 // the set, deeper than the potential asked for), or L stays below it out to the box's far corner.
 Vec4 TranslationForPotential(const RationalMap& iterated, const Vec3& direction, double potential);
+// The potentials TranslationForPotential accepts: [-1000, 0).
+inline constexpr ValueRange kTranslatePotentialRange{-1000.0, 0.0, false, true};
 
 // Indices into the variable vector.
 struct VariableIndex {

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace quijibo {
 
@@ -25,6 +26,7 @@ template <> constexpr Precision PrecisionOf<float128>() { return Precision::kFlo
 
 // "float", "double", "long-double", "float128".
 std::string PrecisionName(Precision p);
+inline const std::vector<std::string> kPrecisionNames = {"float", "double", "long-double", "float128"};
 // Inverse of PrecisionName (also accepts "long_double", "ld", "quad"); throws quijibo::Error.
 Precision ParsePrecision(const std::string& name);
 

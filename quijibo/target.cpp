@@ -81,17 +81,6 @@ ScalarGrid AnalyticTarget(const std::string& spec, const GridFrame& frame) {
   return g;
 }
 
-WeightField ParseWeightField(const std::string& name) {
-  if (name == "layer") return WeightField::kLayer;
-  if (name == "inverse") return WeightField::kInverse;
-  if (name == "balanced") return WeightField::kBalanced;
-  throw Error("unknown weight field \"" + name + "\": expected layer, inverse or balanced");
-}
-
-std::string WeightFieldName(WeightField w) {
-  return w == WeightField::kLayer ? "layer" : w == WeightField::kInverse ? "inverse" : "balanced";
-}
-
 namespace {
 
 // Rescale so the inside sums to -0.5 and the outside to +0.5.
@@ -300,19 +289,8 @@ double WallDepthCells(const ScalarGrid& sdf) {
   return depth[std::size_t(k)];
 }
 
-ThinWallSwitch ParseThinWallSwitch(const std::string& name) {
-  if (name == "auto") return ThinWallSwitch::kAuto;
-  if (name == "on") return ThinWallSwitch::kOn;
-  if (name == "off") return ThinWallSwitch::kOff;
-  throw Error("unknown thin-wall setting \"" + name + "\" (expected auto, on or off)");
-}
-
-std::string ThinWallSwitchName(ThinWallSwitch s) {
-  return s == ThinWallSwitch::kAuto ? "auto" : s == ThinWallSwitch::kOn ? "on" : "off";
-}
-
-bool ThinWallsOn(ThinWallSwitch s, const ScalarGrid& sdf) {
-  if (s != ThinWallSwitch::kAuto) return s == ThinWallSwitch::kOn;
+bool ThinWallsOn(AutoSwitch s, const ScalarGrid& sdf) {
+  if (s != AutoSwitch::kAuto) return s == AutoSwitch::kOn;
   return WallDepthCells(sdf) < kThinWallDepthCells;
 }
 

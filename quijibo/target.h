@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "quijibo/grid.h"
+#include "util/settings.h"
 
 namespace quijibo {
 
@@ -32,8 +33,12 @@ enum class WeightField {
 // The one default of every face (the optimizer, `quijibo energy`, Python's `energy`), so that an
 // energy evaluated on its own is the one the optimizer reports.
 inline constexpr WeightField kDefaultWeightField = WeightField::kBalanced;
-WeightField ParseWeightField(const std::string& name);  // "layer", "inverse" or "balanced"
-std::string WeightFieldName(WeightField w);
+inline const EnumNames<WeightField> kWeightFields("weight field", {{WeightField::kLayer, "layer"},
+                                                                   {WeightField::kInverse, "inverse"},
+                                                                   {WeightField::kBalanced, "balanced"}});
+inline const std::vector<std::string>& kWeightFieldNames = kWeightFields.names();
+inline WeightField ParseWeightField(const std::string& name) { return kWeightFields.Parse(name); }
+inline std::string WeightFieldName(WeightField w) { return kWeightFields.Name(w); }
 
 // k = 1 + the 6-connected grid-layer distance of each cell from the sign interface (k = 1 on
 // cells with a 26-neighbour of the opposite strict sign): the reference code's layers.
@@ -49,6 +54,11 @@ enum class LevelWeights {
   kSampleFinest,  // trilinear samples of the finest W (the reference code)
   kRecompute,     // sample phi on the level grid and rebuild W there
 };
+inline const EnumNames<LevelWeights> kLevelWeights("level weights", {{LevelWeights::kSampleFinest, "sample"},
+                                                                    {LevelWeights::kRecompute, "recompute"}});
+inline const std::vector<std::string>& kLevelWeightNames = kLevelWeights.names();
+inline LevelWeights ParseLevelWeights(const std::string& name) { return kLevelWeights.Parse(name); }
+inline std::string LevelWeightsName(LevelWeights w) { return kLevelWeights.Name(w); }
 
 // The sample points and weights of one level. Sample c is the quaternion
 // [x_c, y_c, z_c, slice] with (x_c, y_c, z_c) = frame.cell_center(c).
@@ -100,12 +110,16 @@ double WallDepthCells(const ScalarGrid& sdf);
 // suite, docs/fidelity.md §9).
 inline constexpr double kThinWallDepthCells = 4.0;
 
-// A setting that follows the target's walls: on, off, or auto (on for a thin-walled target).
-enum class ThinWallSwitch { kAuto, kOn, kOff };
-inline const std::vector<std::string> kThinWallSwitchNames = {"auto", "on", "off"};
-ThinWallSwitch ParseThinWallSwitch(const std::string& name);  // auto|on|off
-std::string ThinWallSwitchName(ThinWallSwitch s);
+// A switch that follows the target's walls: on, off, or auto (on for a thin-walled target): the
+// optimizer's `between_nodes` and the kernel fit's `thin_walls`.
+enum class AutoSwitch { kAuto, kOn, kOff };
+inline const EnumNames<AutoSwitch> kAutoSwitches("thin-wall switch", {{AutoSwitch::kAuto, "auto"},
+                                                                      {AutoSwitch::kOn, "on"},
+                                                                      {AutoSwitch::kOff, "off"}});
+inline const std::vector<std::string>& kAutoSwitchNames = kAutoSwitches.names();
+inline AutoSwitch ParseAutoSwitch(const std::string& name) { return kAutoSwitches.Parse(name); }
+inline std::string AutoSwitchName(AutoSwitch s) { return kAutoSwitches.Name(s); }
 // Whether `s` is on for the target `sdf` (kAuto: WallDepthCells(sdf) < kThinWallDepthCells).
-bool ThinWallsOn(ThinWallSwitch s, const ScalarGrid& sdf);
+bool ThinWallsOn(AutoSwitch s, const ScalarGrid& sdf);
 
 }  // namespace quijibo

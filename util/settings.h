@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "util/error.h"
 #include "util/json_reader.h"
 
 namespace quijibo {
@@ -84,6 +85,40 @@ nlohmann::json ReadValue(const JsonReader& r, const std::string& pointer, Settin
                          const std::vector<int>& sizes, const std::filesystem::path& base, bool must_exist);
 // `p` relative to `base` (absolute and normalized), or `p` when absolute.
 std::string ResolvePath(const std::filesystem::path& base, const std::string& p);
+
+// An enum's names, defined once beside the enum: Parse (with the names messages list), Name, and
+// the choices a setting offers (names()). Aliases are accepted by Parse but not listed.
+//   inline const EnumNames<FrameScale> kFrameScales("frame scale", {{FrameScale::kTrap, "trap"}, ...});
+template <class E>
+class EnumNames {
+ public:
+  EnumNames(std::string what, std::vector<std::pair<E, std::string>> entries,
+            std::vector<std::pair<E, std::string>> aliases = {})
+      : what_(std::move(what)), entries_(std::move(entries)), aliases_(std::move(aliases)) {
+    for (const auto& e : entries_) names_.push_back(e.second);
+  }
+  // Throws quijibo::Error: unknown <what> "x" (expected a, b or c).
+  E Parse(const std::string& name) const {
+    for (const auto* list : {&entries_, &aliases_})
+      for (const auto& [value, n] : *list)
+        if (n == name) return value;
+    std::string expected;
+    for (std::size_t k = 0; k < names_.size(); ++k)
+      expected += (k == 0 ? "" : k + 1 == names_.size() ? " or " : ", ") + names_[k];
+    throw Error("unknown " + what_ + " \"" + name + "\" (expected " + expected + ")");
+  }
+  const std::string& Name(E value) const {
+    for (const auto& e : entries_)
+      if (e.first == value) return e.second;
+    throw Error("unnamed " + what_);  // a value outside the enum's table: a programming error
+  }
+  const std::vector<std::string>& names() const { return names_; }
+
+ private:
+  std::string what_;
+  std::vector<std::pair<E, std::string>> entries_, aliases_;
+  std::vector<std::string> names_;
+};
 
 namespace detail {
 template <class T>
@@ -191,6 +226,15 @@ class Schema {
     return *this;
   }
 
+  // Settings several Options structs share, each defined once beside its concept: `add` is a
+  // callable (Schema<O>&) that adds them, with the same key, flag, help, range and doc in every
+  // struct that holds them (optim::PrecisionSetting, ...).
+  template <class F>
+  Schema& With(F&& add) {
+    std::forward<F>(add)(*this);
+    return *this;
+  }
+
   const std::vector<Setting<O>>& settings() const { return settings_; }
   // The setting of `key` that applies to `o` (several may share a key under different kinds).
   const Setting<O>* Find(const std::string& key, const O& o) const {
@@ -231,6 +275,17 @@ class Schema {
       if (r.has(pointer + "/" + top)) r.allow_keys(pointer + "/" + top, members);
     r.allow_keys(pointer, keys);
   }
+  // An Options struct as its JSON object says (missing keys keep `start`'s values), and back: the
+  // FromJson and ToJson of a struct that has nothing but its settings.
+  O FromJson(const JsonReader& r, const std::string& pointer, const std::filesystem::path& base, O start = O()) const {
+    Read(r, pointer, base, start);
+    return start;
+  }
+  nlohmann::json ToJson(const O& o) const {
+    nlohmann::json j = nlohmann::json::object();
+    Write(o, j);
+    return j;
+  }
   // Every setting (DescribeSetting), with its default in `defaults`.
   nlohmann::json Describe(const O& defaults = O()) const {
     nlohmann::json out = nlohmann::json::array();
@@ -250,6 +305,16 @@ class Schema {
       if (!s.Applies(o)) continue;
       nlohmann::json v = s.get(o);
       if (!v.is_null()) out[nlohmann::json::json_pointer("/" + s.key)] = std::move(v);
+    }
+  }
+  // The settings that apply and differ from `defaults`'s into `out`: what a user changed, as an
+  // experiment written by a command (`bench shapes`) states it.
+  void WriteChanged(const O& o, nlohmann::json& out, const O& defaults = O()) const {
+    if (!out.is_object()) out = nlohmann::json::object();
+    for (const auto& s : settings_) {
+      if (!s.Applies(o)) continue;
+      nlohmann::json v = s.get(o);
+      if (!v.is_null() && v != s.get(defaults)) out[nlohmann::json::json_pointer("/" + s.key)] = std::move(v);
     }
   }
   // The first setting outside its range, as "<key>: expected ..., found ...", or empty (a key

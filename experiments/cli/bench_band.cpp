@@ -13,7 +13,7 @@
 #include <cstdio>
 
 #include "experiments/cli/cli.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "optim/lbfgsb.h"
 #include "quijibo/band_energy.h"
 #include "util/error.h"

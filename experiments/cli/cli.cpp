@@ -8,7 +8,7 @@
 #include "experiments/cli/bind.h"
 #include "experiments/pipeline/energy.h"
 #include "experiments/pipeline/target.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "util/error.h"
 #include "quijibo/frame.h"
 #include "util/io.h"

@@ -17,7 +17,7 @@
 #include "experiments/pipeline/mesh.h"
 #include "experiments/pipeline/pictures.h"
 #include "mesh/julia_field.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "util/child_process.h"
 #include "util/error.h"
 #include "util/io.h"
@@ -267,7 +267,7 @@ std::vector<std::vector<char>> KernelSetsAtRandomPoints(const RationalMap& input
                                                         const pipeline::MeshStageOptions& o,
                                                         const std::vector<std::string>& kernels, std::size_t count,
                                                         std::uint64_t seed) {
-  const RationalMap map = IterationMap(input_map, o.iteration_frame == "reference", o.detail);
+  const RationalMap map = IterationMap(input_map, o.iteration_frame, o.detail);
   const JuliaOptions julia = o.TranslatedJuliaOfIterated(map);
   const double half = map.frame.fractal_radius / 2;
   const Vec3 c = map.frame.box_center();

@@ -6,7 +6,7 @@
 
 #include "experiments/cli/bind.h"
 #include "experiments/cli/cli.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "experiments/pipeline/optimize.h"
 #include "optim/optimizer.h"
 #include "util/error.h"
@@ -45,17 +45,13 @@ void AddOptimizeCommand(CLI::App& app) {
   for (const char* flag : {"--max-v", "--max-f", "--max-r", "--tolerance"}) notation_only.push_back(c->get_option(flag));
   c->callback([a, notation_only] {
     optim::OptimizeOptions& o = a->o;
-    if (a->schedule.ends_with(".json")) {
+    if (a->schedule.ends_with(".json"))
       for (const CLI::Option* opt : notation_only)
         if (opt->count() > 0)
           throw Error(opt->get_name() + " does not apply to the JSON schedule " + a->schedule +
                       ": put the caps and tolerances in the file (\"defaults\": {\"V\": {\"max_iterations\": 100}} "
                       "or on each pass)");
-      const nlohmann::json j = ParseJson(ReadFile(a->schedule), a->schedule);
-      o.schedule = optim::Schedule::FromJson(JsonReader(j, a->schedule), "");
-    } else {
-      o.schedule = o.ScheduleFromNotation(a->schedule);
-    }
+    o.schedule = o.ScheduleFromString(a->schedule, std::filesystem::current_path());
     const ScalarGrid sdf = LoadTarget(a->target, a->target_resolution);
     // The initial map: given, or on resume the one the run started from (the stage reads it again).
     if (!a->resume && a->map_path.empty()) throw Error("--map is required (unless --resume)");

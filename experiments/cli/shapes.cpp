@@ -13,7 +13,7 @@
 #include "experiments/cli/cli.h"
 #include "experiments/pipeline/mesh.h"
 #include "mesh/fidelity.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "mesh/triangle_mesh.h"
 #include "optim/optimizer.h"
 #include "util/child_process.h"
@@ -50,7 +50,7 @@ json Measure(const FidelityArgs& a) {
   mesh::CheckSameFrame(map.frame, a.map, a.target);
   const ScalarGrid target = ReadGrid(a.target);
   mesh::FidelityOptions o = a.o;
-  o.reference_frame = a.iteration.iteration_frame == "reference";
+  o.frame = a.iteration.iteration_frame;
   o.detail = a.iteration.detail;
   pipeline::MeshStageOptions iteration = a.iteration;
   iteration.julia = o.julia;
@@ -216,10 +216,12 @@ void MeasureRun(const ShapeBenchArgs& b, const Shape& sh, const fs::path& run, j
 // One shape through `quijibo run` (an experiment written into its folder), measured; its render
 // and slice copied to --images.
 json RunShape(const ShapeBenchArgs& b, const Shape& sh, const fs::path& dir, const std::string& schedule) {
+  json optimizer = {{"schedule", schedule}, {"absolute_every", 50}};
+  optim::OptimizeOptions::Settings().WriteChanged(b.optimizer, optimizer);  // the optimizer flags given
   const json exp = {{"name", sh.name},
                     {"target", {{"mesh", sh.mesh}, {"resolution", b.resolution}, {"box", b.target_box}}},
                     {"initial", {{"kind", b.initializer}}},
-                    {"optimizer", {{"schedule", schedule}, {"absolute_every", 50}, {"between_nodes", ThinWallSwitchName(b.optimizer.between_nodes)}}},
+                    {"optimizer", optimizer},
                     {"mesh", {{"resolution", b.mesh_resolution}, {"iterations", b.o.julia.iterations}, {"vdb", false}}},
                     {"pictures", {{"slice_iterations", 1}}}};
   const std::string exp_path = (dir / "experiment.json").string();
@@ -335,7 +337,7 @@ std::string SuiteTable(const ShapeBenchArgs& b, const json& results) {
   std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
   const std::string header = "Shape suite, " + std::string(date) + ", " + std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) +
                              " cores; initializer " + b.initializer + ", schedule `" + b.schedule + "`" +
-                             ", between_nodes " + ThinWallSwitchName(b.optimizer.between_nodes) + ", target " +
+                             ", between_nodes " + AutoSwitchName(b.optimizer.between_nodes) + ", target " +
                              std::to_string(b.resolution) + "³ (" + b.target_box + " box), mesh " +
                              std::to_string(b.mesh_resolution) + "³ n = " + std::to_string(b.o.julia.iterations) +
                              "; lattice " + std::to_string(b.o.lattice) + "³ over the shape box grown " +

@@ -39,25 +39,25 @@ void AddSdfCommand(CLI::App& app) {
   sdf->add_option("mesh", so->input, "Input mesh")->required();
   sdf->add_option("-o,--out", so->output, "Output .qgrid (the frame goes to <name>.frame.json)")->required();
   sdf->add_option("--vdb", so->vdb_output, "Also write the field as an OpenVDB level set");
-  AddTargetResolution(sdf, so->resolution, "-r,--resolution", "Cells per axis");
-  sdf->add_option("--padding", so->padding, "Normalization padding")->capture_default_str();
-  sdf->add_option("--fractal-radius", so->fractal_radius, "Fractal frame scale")->capture_default_str();
+  AddTargetResolution(sdf, so->target.resolution, "-r,--resolution", "Cells per axis");
+  sdf->add_option("--padding", so->target.padding, "Normalization padding")->capture_default_str();
+  sdf->add_option("--fractal-radius", so->target.fractal_radius, "Fractal frame scale")->capture_default_str();
   sdf->add_option_function<std::string>(
-         "--target-box", [so](const std::string& b) { so->box = ParseTargetBox(b); },
+         "--target-box", [so](const std::string& b) { so->target.box = ParseTargetBox(b); },
          "unit: the whole unit cube, a margin of `padding` around the shape (default); reference: the reference "
          "code's box, the shape plus one cell")
       ->check(CLI::IsMember({"unit", "reference"}));
   sdf->add_option_function<std::string>(
-         "--origin", [so](const std::string& o) { so->origin = mesh::ParseOriginPlacement(o); },
+         "--origin", [so](const std::string& o) { so->target.origin = mesh::ParseOriginPlacement(o); },
          "center: the fractal origin at the bounding box's centre (default here); inside: at the point deepest "
          "inside the shape (mesh/normalize.h)")
       ->check(CLI::IsMember({"center", "inside"}));
   sdf->add_option_function<std::string>(
-         "--frame-scale", [so](const std::string& v) { so->frame_scale = mesh::ParseFrameScale(v); },
+         "--frame-scale", [so](const std::string& v) { so->target.frame_scale = mesh::ParseFrameScale(v); },
          "With --origin inside: trap (default) chooses fractal_radius so that the unit ball about the origin "
          "just fits inside the shape; fixed keeps --fractal-radius (mesh/normalize.h)")
       ->check(CLI::IsMember({"trap", "fixed"}));
-  sdf->add_flag("--refuse-open", [so](std::int64_t) { so->sdf.allow_open = false; },
+  sdf->add_flag("--refuse-open", [so](std::int64_t) { so->target.sdf.allow_open = false; },
                 "Refuse meshes with holes instead of signing them by winding numbers");
   sdf->callback([so] { mesh::RunSdfCommand(*so); });
 }

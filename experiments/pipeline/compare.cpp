@@ -10,7 +10,7 @@
 #include "mesh/marching_cubes.h"
 #include "methods/modulus_target.h"
 #include "mesh/pictures.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "quijibo/energy.h"
 #include "util/error.h"
 #include "util/io.h"

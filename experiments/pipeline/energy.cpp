@@ -18,33 +18,17 @@ const Schema<EnergyStageOptions>& EnergyStageOptions::Settings() {
   using O = EnergyStageOptions;
   static const Schema<O> s =
       Schema<O>()
-          .Number(
-              "alpha", "--alpha", "Sharpness of tanh", [](auto& o) -> double& { return o.energy.alpha; },
-              EnergyOptions::kAlphaRange)
+          .With(optim::AlphaSetting([](auto& o) -> double& { return o.energy.alpha; }))
           .Choice("evaluator", "-e,--evaluator", "loglinear (exact, double; also: dense) or cached (the paper's)",
                   [](auto& o) -> std::string& { return o.evaluator; }, {"loglinear", "dense", "cached"})
-          .Enum(
-              "precision", "-p,--precision", "float, double, long-double or float128 (cached only)",
-              optim::OptimizeOptions::kPrecisionNames, [](const O& o) { return PrecisionName(o.precision); },
-              [](O& o, const std::string& v) { o.precision = ParsePrecision(v); })
-          .Enum(
-              "storage", "--storage", "loglinear log-distance storage: auto, double, float, on-the-fly",
-              optim::OptimizeOptions::kStorageNames, [](const O& o) { return StorageName(o.storage); },
-              [](O& o, const std::string& v) { o.storage = ParseStorage(v); })
-          .Enum(
-              "weights", "-w,--weights",
-              "Weight field: balanced (the optimizer's), layer (reference code) or inverse (paper, 1/phi)",
-              optim::OptimizeOptions::kWeightNames, [](const O& o) { return WeightFieldName(o.weights); },
-              [](O& o, const std::string& v) { o.weights = ParseWeightField(v); })
+          .With(optim::PrecisionSetting([](auto& o) -> Precision& { return o.precision; }))
+          .With(optim::StorageSetting([](auto& o) -> LogLinearOptions::Storage& { return o.storage; }))
+          .With(optim::WeightsSetting([](auto& o) -> WeightField& { return o.weights; }))
           .Integer(
               "resolution", "-r,--resolution",
               "Level resolution N (cells along the longest axis); 0 = the target's own grid",
               [](auto& o) -> int& { return o.resolution; }, 0, 4096)
-          .Enum(
-              "level_weights", "--level-weights", "Coarse-level weights: sample (the finest W, as the reference) or "
-              "recompute", optim::OptimizeOptions::kLevelWeightNames,
-              [](const O& o) { return optim::LevelWeightsName(o.level_weights); },
-              [](O& o, const std::string& v) { o.level_weights = optim::ParseLevelWeights(v); })
+          .With(optim::LevelWeightsSetting([](auto& o) -> LevelWeights& { return o.level_weights; }))
           .Number(
               "slice", "--slice", "k component S of the sample quaternions [x, y, z, S]",
               [](auto& o) -> double& { return o.slice; }, -std::numeric_limits<double>::infinity(),
@@ -62,9 +46,7 @@ const Schema<EnergyStageOptions>& EnergyStageOptions::Settings() {
 
 EnergyStageOptions EnergyStageOptions::FromJson(const JsonReader& r, const std::string& p,
                                                 const std::filesystem::path& base) {
-  EnergyStageOptions o;
-  Settings().Read(r, p, base, o);
-  return o;
+  return Settings().FromJson(r, p, base);
 }
 
 namespace {

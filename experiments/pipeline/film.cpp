@@ -315,7 +315,7 @@ FilmSummary MakeFilm(const FilmOptions& o, const std::string& out, bool quiet) {
     const RationalMap* map = &iterated;
     if (fixed_map) {
       // The map is iterated as made above: no frame change or detail again.
-      mo.iteration_frame = "map";
+      mo.iteration_frame = IterationFrame::kMap;
       mo.detail = 0;
       mo.translate.reset();
       if (o.vary == "translate_potential") {

@@ -8,7 +8,7 @@
 
 #include "experiments/pipeline/initial_pictures.h"
 #include "experiments/pipeline/product.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "quijibo/energy.h"
 #include "util/error.h"
 #include "util/io.h"
@@ -54,8 +54,8 @@ void AddLogKernelSettings(Schema<O>& s) {
           "thin_walls", "--thin-walls",
           "log-kernel: on a thin-walled target, pairs 0.6 times as far apart and max_roots doubled: auto (when "
           "most of the inside is within 4 cells of the surface), on or off",
-          kThinWallSwitchNames, [](const O& o) { return ThinWallSwitchName(o.kernel.thin_walls); },
-          [](O& o, const std::string& v) { o.kernel.thin_walls = ParseThinWallSwitch(v); })
+          kAutoSwitchNames, [](const O& o) { return AutoSwitchName(o.kernel.thin_walls); },
+          [](O& o, const std::string& v) { o.kernel.thin_walls = ParseAutoSwitch(v); })
       .Doc("log-kernel: on a thin-walled target the pairs are spaced 0.6 times `root_spacing` apart and `max_roots` "
            "is doubled (at most 4000); `auto`: when the 90th percentile of the inside's depth is below 4 target "
            "cells ([fidelity.md](fidelity.md) §9)")
@@ -263,11 +263,7 @@ O O::FromJson(const JsonReader& r, const std::string& p, const fs::path& base, c
   return o;
 }
 
-json O::ToJson() const {
-  json j;
-  Settings().Write(*this, j);
-  return j;
-}
+json O::ToJson() const { return Settings().ToJson(*this); }
 
 MonopoleStartVerdict JudgeMonopoleStart(const monopole::GreedyFitSummary& fit, double epsilon, int candidates,
                                         const monopole::StartCheck& start) {
@@ -327,7 +323,7 @@ RationalMap FitLogKernel(const TargetResult& target, const O& o, monopole::Kerne
                     {"roots", o.kernel.roots},
                     {"max_roots", o.kernel.max_roots},
                     {"root_spacing", o.kernel.spacing},
-                    {"thin_walls", ThinWallSwitchName(o.kernel.thin_walls)},
+                    {"thin_walls", AutoSwitchName(o.kernel.thin_walls)},
                     {"offset_cells", o.kernel.offset_cells},
                     {"band_cells", o.kernel.band_cells},
                     {"band_amplitude", o.kernel.amplitude},

@@ -77,16 +77,16 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
               "Root translation chosen by the potential L = log|R| it leaves at -t, where the map sends the inside "
               "of the set: along --translate's direction (default z), -3 rough, -2 intricate, -1.5 breaks up "
               "(docs/meshing.md)",
-              [](auto& o) -> std::optional<double>& { return o.translate_potential; }, -1000.0, 0.0)
-          .OpenAbove()
+              [](auto& o) -> std::optional<double>& { return o.translate_potential; }, kTranslatePotentialRange)
           .Doc("root translation by its effect: t along `translate`'s direction (default z; its length is ignored) "
                "such that the iterated map's potential L = log|R| is this at −t, the point the inside of the "
                "set is sent to: −3 rough, −2 intricate, −1.5 breaks up, 0 the surface; the translation found is "
                "reported ([meshing.md](meshing.md) \"Root translation\")")
-          .Choice("iteration_frame", "--iteration-frame",
-                  "Frame the map is iterated in (and --translate, --box given in): map (as optimized) or reference "
-                  "(the reference code's: origin at the box centre, longest side 3)",
-                  [](auto& o) -> std::string& { return o.iteration_frame; }, {"map", "reference"})
+          .Enum("iteration_frame", "--iteration-frame",
+                "Frame the map is iterated in (and --translate, --box given in): map (as optimized) or reference "
+                "(the reference code's: origin at the box centre, longest side 3)",
+                kIterationFrameNames, [](const MeshStageOptions& o) { return IterationFrameName(o.iteration_frame); },
+                [](MeshStageOptions& o, const std::string& v) { o.iteration_frame = ParseIterationFrame(v); })
           .Doc("the frame the map is iterated in and `translate` is given in: the map's own, or the reference "
                "code's (origin at the mesh's bounding-box centre, longest side 3), where the paper's translations "
                "are given ([meshing.md](meshing.md) \"Root translation\")")
@@ -102,9 +102,10 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
                   [](auto& o) -> std::string& { return o.frame; }, {"user", "fractal"})
           .Boolean("vdb", "", "Also write julia.vdb", [](auto& o) -> bool& { return o.vdb; })
           .Boolean("obj", "", "Also write julia.obj", [](auto& o) -> bool& { return o.obj; })
-          .Choice(
-              "precision", "--precision", "Iteration precision: float, double, long-double or float128",
-              [](auto& o) -> std::string& { return o.precision; }, kPrecisionNames)
+          .Enum(
+              "precision", "--precision", "Iteration precision: float, double, long-double or float128", kPrecisionNames,
+              [](const MeshStageOptions& o) { return PrecisionName(o.precision); },
+              [](MeshStageOptions& o, const std::string& v) { o.precision = ParsePrecision(v); })
           .Choice(
               "kernel", "--kernel",
               "Iteration kernel in double precision: vector (SIMD, glibc libmvec), fused (SIMD, quijibo's own "
@@ -121,7 +122,7 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
 JuliaSetupOptions MeshStageOptions::Setup() const {
   JuliaSetupOptions s;
   s.julia = julia;
-  s.reference_frame = iteration_frame == "reference";
+  s.frame = iteration_frame;
   s.detail = detail;
   s.translate = translate;
   s.translate_potential = translate_potential;
@@ -152,16 +153,10 @@ std::string MeshStageOptions::Validate() const {
 
 MeshStageOptions MeshStageOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
                                             const MeshStageOptions& start) {
-  MeshStageOptions o = start;
-  Settings().Read(r, p, base, o);
-  return o;
+  return Settings().FromJson(r, p, base, start);
 }
 
-json MeshStageOptions::ToJson() const {
-  json j;
-  Settings().Write(*this, j);
-  return j;
-}
+json MeshStageOptions::ToJson() const { return Settings().ToJson(*this); }
 
 bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& o, mesh::MeshingSummary* summary,
                  mesh::FieldBand* band, mesh::TriangleMesh* mesh, mesh::JuliaFieldStats*) {
@@ -187,7 +182,7 @@ MeshStageResult MeshJulia(const JuliaSetup& setup, const MeshStageOptions& o, co
   if (auto why = m.Validate(); !why.empty()) throw Error("mesh: " + why);
   r.julia = setup.julia;
   mesh::JuliaFieldStats stats;
-  const mesh::BatchField field = mesh::MakeJuliaField(map, r.julia, o.iso, ParsePrecision(o.precision), &stats,
+  const mesh::BatchField field = mesh::MakeJuliaField(map, r.julia, o.iso, o.precision, &stats,
                                                        ParseJuliaKernel(o.kernel));
   const bool want_band = Wants(o, "field");
   r.writer = mesher(field, m, &r.summary, want_band ? &r.band : nullptr, &r.mesh, &stats);
@@ -241,7 +236,7 @@ void WriteMeshFiles(const MeshStageResult& r, const MeshStageOptions& o, const M
   mesh::WriteVdbVolumes(f.vdb, r.mesh, vo, Wants(o, "field") ? &raw : nullptr);
 }
 
-json JuliaJson(const JuliaOptions& j, double iso, const std::string& precision) {
+json JuliaJson(const JuliaOptions& j, double iso, Precision precision) {
   return {{"iterations", j.iterations},
           {"escape_radius", j.escape_radius},
           {"iso", iso},
@@ -250,7 +245,7 @@ json JuliaJson(const JuliaOptions& j, double iso, const std::string& precision) 
           {"root_scale", j.root_scale},
           {"rotation", j.placement.rotation},
           {"rotation_center", j.placement.center},
-          {"precision", precision}};
+          {"precision", PrecisionName(precision)}};
 }
 
 json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std::string& map_path, const MeshFiles& f) {
@@ -261,16 +256,16 @@ json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std:
                   {"frame", o.frame},
                   {"julia", JuliaJson(r.julia, o.iso, o.precision)},
                   {"iteration_frame",
-                   {{"name", o.iteration_frame},
+                   {{"name", IterationFrameName(o.iteration_frame)},
                     {"detail", o.detail},
                     {"lambda", r.lambda},
                     {"translate_potential", o.translate_potential ? json(*o.translate_potential) : json(nullptr)},
                     {"fractal_radius", r.frame.fractal_radius},
                     {"origin", r.frame.origin}}},
-                  {"kernel", o.precision == "double" ? o.kernel : std::string("scalar")},
+                  {"kernel", o.precision == Precision::kDouble ? o.kernel : std::string("scalar")},
                   {"box", {{"min", r.meshing.min_corner}, {"max", r.meshing.max_corner}}},
                   // "frame" is the output's; the box is where the map was sampled, in its iteration frame.
-                  {"box_frame", o.iteration_frame == "reference" ? "reference" : "fractal"},
+                  {"box_frame", o.iteration_frame == IterationFrame::kReference ? "reference" : "fractal"},
                   {"resolution", r.meshing.resolution},
                   {"cells", s.cells},
                   {"spacing", s.spacing},

@@ -18,14 +18,13 @@
 
 namespace quijibo::pipeline {
 
-inline const std::vector<std::string> kPrecisionNames = {"float", "double", "long-double", "float128"};
 
 struct MeshStageOptions {
   mesh::MeshingOptions meshing;  // resolution and the mesher's settings (box: see `box`)
   JuliaOptions julia;            // n, escape radius, slice, root translation and scale, placement
   double iso = 0.0;              // the surface log|q_n| = iso
   std::string frame = "user";    // coordinates of the output: "user" (the input mesh's) or "fractal"
-  std::string precision = "double";
+  Precision precision = Precision::kDouble;
   std::string kernel = "vector";  // double precision: the vectorized kernel or the scalar reference (julia_batch.h)
   // The box in the fractal frame, xmin,ymin,zmin,xmax,ymax,zmax; empty: the whole normalized cube
   // (the map's box centre +- fractal_radius / 2).
@@ -51,7 +50,7 @@ struct MeshStageOptions {
   // reference code's world frame, ReferenceFrame in rational_map.h, where the paper's translations
   // 1.41 / 0.54 / 1.07 are given). The one-step set is the same in both; the box and `translate`
   // are in this frame.
-  std::string iteration_frame = "map";
+  IterationFrame iteration_frame = IterationFrame::kMap;
   // Fractal detail (WithDetail, rational_map.h): the width of the band |L| < 1 about the one-step
   // surface, percent of the shape's size; the one-step set stays. 0: the map as optimized.
   double detail = kSmoothDetail;
@@ -118,6 +117,6 @@ nlohmann::json MeshSummary(const MeshStageResult& result, const MeshStageOptions
 // faces), specks, surface following, evaluations, tiles, blocks, seconds.
 nlohmann::json MesherSummaryJson(const mesh::MeshingSummary& summary, const mesh::MeshingOptions& options);
 // The Julia options as the summaries record them.
-nlohmann::json JuliaJson(const JuliaOptions& julia, double iso, const std::string& precision);
+nlohmann::json JuliaJson(const JuliaOptions& julia, double iso, Precision precision);
 
 }  // namespace quijibo::pipeline

@@ -84,9 +84,7 @@ const Schema<ModulusStageOptions>& ModulusStageOptions::Settings() {
           .Doc("a `--params` file: alpha/beta as numbers or spatially varying fields, `origin_offset` (its keys "
                "override `alpha`, `beta` and `offset`; checked by `--check`; it and the mask files it reads join "
                "the stage's hash)")
-          .Integer(
-              "sdf_resolution", "--sdf-resolution", "Mesh targets: SDF cells on [-0.5,0.5]^3",
-              [](auto& o) -> int& { return o.sdf_resolution; }, 8, 2048);
+          .With(mesh::UnitSdfResolutionSetting([](auto& o) -> int& { return o.sdf_resolution; }));
   return s;
 }
 

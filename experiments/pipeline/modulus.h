@@ -11,6 +11,7 @@
 #include "experiments/pipeline/product.h"
 #include "experiments/pipeline/settings.h"
 #include "methods/modulus.h"
+#include "methods/modulus_target.h"
 
 namespace quijibo::pipeline {
 
@@ -31,7 +32,7 @@ struct ModulusStageOptions {
   ShapeModulusOptions shape;                  // alpha and beta as numbers (fields: `params`)
   std::optional<std::vector<double>> offset;  // origin translation ox oy oz (2023 Fig. 5)
   std::optional<std::string> params;          // alpha/beta fields and origin_offset (override the above)
-  int sdf_resolution = 100;                   // mesh targets: SDF cells on [-0.5, 0.5]^3
+  int sdf_resolution = mesh::kDefaultUnitSdfResolution;  // UnitSdfResolutionSetting
   VersorOptions versor;
   ProductOutputOptions output;
   bool two_d = false;              // the complex plane (slice z = 0 of a 3D target)

@@ -5,7 +5,7 @@
 
 #include "experiments/pipeline/mesh.h"
 #include "mesh/julia_field.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "mesh/triangle_mesh.h"
 #include "util/error.h"
 #include "util/io.h"
@@ -58,33 +58,27 @@ std::string PicturesOptions::Validate() const { return Settings().Check(*this); 
 
 PicturesOptions PicturesOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
                                           const PicturesOptions& start) {
-  PicturesOptions o = start;
-  Settings().Read(r, p, base, o);
-  return o;
+  return Settings().FromJson(r, p, base, start);
 }
 
-json PicturesOptions::ToJson() const {
-  json j;
-  Settings().Write(*this, j);
-  return j;
-}
+json PicturesOptions::ToJson() const { return Settings().ToJson(*this); }
 
 SlicePicture SliceAgainstTargetPicture(const RationalMap& map, const ScalarGrid& target, const std::string& target_path,
                                        const mesh::SliceView& view, const JuliaOptions& julia, double iso,
-                                       const std::string& precision) {
+                                       Precision precision) {
   if (target.coordinates != "fractal")
     throw Error(target_path + ": expected a grid in fractal coordinates, found \"" + target.coordinates + "\"");
   mesh::CheckSameFrame(map.frame, "the map", target_path);
   if (auto why = view.Validate(); !why.empty()) throw Error("picture: " + why);
   if (auto why = julia.Validate(); !why.empty()) throw Error(why);
-  const mesh::BatchField field = mesh::MakeJuliaField(map, julia, iso, ParsePrecision(precision));
+  const mesh::BatchField field = mesh::MakeJuliaField(map, julia, iso, precision);
   SlicePicture p;
   p.image = mesh::SliceAgainstTarget(field, target, view, &p.agreement);
   return p;
 }
 
 json SliceReport(const SlicePicture& p, const std::string& out, const JuliaOptions& julia, double iso,
-                 const std::string& precision) {
+                 Precision precision) {
   const mesh::SliceAgreement& a = p.agreement;
   return {{"out", out},
           {"agreement", a.agreement()},
@@ -114,9 +108,9 @@ void Pictures(const PicturesOptions& o, const RationalMap& initial, const Ration
   for (const auto& [map, name] :
        {std::pair{&optimized, std::string("slice")}, std::pair{&initial, std::string("initial-slice")}}) {
     const std::string png = dir + "/" + name + "-n" + n + ".png";
-    const SlicePicture p = SliceAgainstTargetPicture(*map, target, target_path, view, julia, 0.0, "double");
+    const SlicePicture p = SliceAgainstTargetPicture(*map, target, target_path, view, julia, 0.0, Precision::kDouble);
     WritePng(png, p.image);
-    WriteFileAtomically(dir + "/" + name + ".out", SliceReport(p, png, julia, 0.0, "double").dump(2) + "\n");
+    WriteFileAtomically(dir + "/" + name + ".out", SliceReport(p, png, julia, 0.0, Precision::kDouble).dump(2) + "\n");
   }
   if (!mesh_path.empty()) WritePng(dir + "/render.png", mesh::RenderMesh(mesh::ReadMesh(mesh_path), o.render));
 }

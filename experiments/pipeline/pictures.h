@@ -42,10 +42,10 @@ struct SlicePicture {
 // the map's. Throws quijibo::Error otherwise.
 SlicePicture SliceAgainstTargetPicture(const RationalMap& map, const ScalarGrid& target, const std::string& target_path,
                                        const mesh::SliceView& view, const JuliaOptions& julia, double iso,
-                                       const std::string& precision);
+                                       Precision precision);
 // The report of a slice (the standard output of `quijibo picture slice`).
 nlohmann::json SliceReport(const SlicePicture& picture, const std::string& out, const JuliaOptions& julia, double iso,
-                           const std::string& precision);
+                           Precision precision);
 
 // The view the run's slices use: the plane z = 0 across the target grid's box.
 mesh::SliceView TargetSliceView(const ScalarGrid& target, const PicturesOptions& options);

@@ -50,9 +50,7 @@ const Schema<PortalStageOptions>& PortalStageOptions::Settings() {
           .Number(
               "feather", "--feather", "With --koch: feather of the portal edges",
               [](auto& o) -> double& { return o.feather; }, 0, 1e6)
-          .Integer(
-              "sdf_resolution", "--sdf-resolution", "Mesh targets: SDF cells on [-0.5,0.5]^3",
-              [](auto& o) -> int& { return o.sdf_resolution; }, 8, 2048);
+          .With(mesh::UnitSdfResolutionSetting([](auto& o) -> int& { return o.sdf_resolution; }));
   return s;
 }
 

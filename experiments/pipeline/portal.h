@@ -9,6 +9,7 @@
 
 #include "experiments/pipeline/product.h"
 #include "experiments/pipeline/settings.h"
+#include "methods/modulus_target.h"
 #include "methods/portal_scene.h"
 
 namespace quijibo::pipeline {
@@ -22,7 +23,7 @@ struct PortalStageOptions {
   bool turbulent = false;       // with koch: alpha 30 and a noise versor (2024 Fig. 8)
   std::optional<double> alpha;  // overrides the spec's
   double feather = 0.005;       // with koch: feather of the portal edges
-  int sdf_resolution = 100;     // mesh targets and SDF masks of the spec
+  int sdf_resolution = mesh::kDefaultUnitSdfResolution;  // UnitSdfResolutionSetting
   ProductOutputOptions output;  // iterations, escape and box default to the spec's
 
   std::string Validate() const;

@@ -68,16 +68,10 @@ std::string ProductOutputOptions::Validate() const { return Settings().Check(*th
 
 ProductOutputOptions ProductOutputOptions::FromJson(const JsonReader& r, const std::string& p, const fs::path& base,
                                                     const ProductOutputOptions& start) {
-  ProductOutputOptions o = start;
-  Settings().Read(r, p, base, o);
-  return o;
+  return Settings().FromJson(r, p, base, start);
 }
 
-json ProductOutputOptions::ToJson() const {
-  json j;
-  Settings().Write(*this, j);
-  return j;
-}
+json ProductOutputOptions::ToJson() const { return Settings().ToJson(*this); }
 
 Product Produce(std::shared_ptr<const QuaternionMap> map, const ProductOutputOptions& o, const IterationOptions& jo,
                 const ModulusTarget& target, bool two_d) {

@@ -25,7 +25,7 @@ json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const
   o.julia = julia;
   o.iso = iso;
   o.detail = options.detail;
-  o.reference_frame = options.reference_frame;
+  o.frame = options.frame;
   o.iterated = options.iterated;
   const mesh::Fidelity f = mesh::MeasureSets(chosen, target, o);
   json j = f.ToJson();

@@ -35,7 +35,7 @@ struct QualityOptions {
   int lattice = 32;
   // The n-step set as the mesh stage iterates it (its `detail` and `iteration_frame`).
   double detail = kSmoothDetail;
-  bool reference_frame = false;
+  IterationFrame frame = IterationFrame::kMap;
   std::shared_ptr<const RationalMap> iterated;  // `chosen` as iterated, when made already (MakeJuliaSetup)
 };
 

@@ -1,4 +1,5 @@
-// report.md: one page with the key figures of a finished run, read from the stages' files.
+#include "experiments/pipeline/report.h"
+
 #include <ctime>
 #include <filesystem>
 #include <sstream>

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <csignal>
+#include <optional>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -18,13 +19,15 @@
 
 #include "experiments/pipeline/plot.h"
 #include "experiments/pipeline/quality.h"
+#include "experiments/pipeline/report.h"
 #include "experiments/pipeline/triptych.h"
 #include "experiments/pipeline/report_html.h"
 #include "mesh/fidelity.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
 #include "util/error.h"
 #include "util/io.h"
 #include "util/progress.h"
+#include "util/signals.h"
 
 namespace quijibo::pipeline {
 
@@ -219,6 +222,9 @@ class Runner {
                         const std::string& map_path);
   void TriptychStage(const std::vector<std::string>& upstream, const std::string& map_path);
   void FidelityStage(const std::string& initial_hash, const std::string& chosen_hash, const std::string& map_path);
+  // The map at `map_path` as iterated with `options` (MakeJuliaSetup), made once per run: the mesh
+  // stage, the fidelity stage and the triptych share it (the translation by potential is a search).
+  std::shared_ptr<const JuliaSetup> IteratedMap(const std::string& map_path, const MeshStageOptions& options);
 
   const Experiment& e_;
   bool quiet_;
@@ -230,6 +236,7 @@ class Runner {
   // compute in their folder rather than in "<folder>.partial".
   std::map<std::string, std::vector<std::string>> downstream_;
   std::set<std::string> in_place_;
+  std::map<std::string, std::shared_ptr<const JuliaSetup>> iterated_;  // IteratedMap's, by map and settings
   // What the run has done, guarded by mu_ for SignalWatcher's thread.
   std::mutex mu_;
   std::string stage_, computing_;
@@ -258,15 +265,10 @@ class SignalWatcher {
       }
       if (b != 0) stop(b);
     });
-    struct sigaction sa {};
-    sa.sa_handler = OnRunSignal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int_);
-    sigaction(SIGTERM, &sa, &old_term_);
+    guard_.emplace(OnRunSignal);
   }
   ~SignalWatcher() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
+    guard_.reset();
     const unsigned char done = 0;
     [[maybe_unused]] const ssize_t n = ::write(g_signal_pipe[1], &done, 1);
     thread_.join();
@@ -278,7 +280,7 @@ class SignalWatcher {
 
  private:
   std::thread thread_;
-  struct sigaction old_int_ {}, old_term_ {};
+  std::optional<InterruptGuard> guard_;
 };
 
 void Runner::Quijibo() {
@@ -389,6 +391,15 @@ void Runner::PlotStage(const std::vector<std::string>& opt_hashes) {
   });
 }
 
+std::shared_ptr<const JuliaSetup> Runner::IteratedMap(const std::string& map_path, const MeshStageOptions& options) {
+  // The settings the setup reads, as the stage hashes write them.
+  json key = options.ToJson();
+  key["map"] = map_path;
+  auto& made = iterated_[key.dump()];
+  if (!made) made = std::make_shared<const JuliaSetup>(MakeJuliaSetup(ReadMap(map_path), options.Setup()));
+  return made;
+}
+
 // The chosen optimizer's map meshed (`folder` "mesh" with the mesh stage's settings, "intricate"
 // with the intricate surface's), with its detail against the target mesh.
 std::string Runner::MeshStage(const std::string& folder, const MeshStageOptions& options,
@@ -401,7 +412,7 @@ std::string Runner::MeshStage(const std::string& folder, const MeshStageOptions&
     const RationalMap map = ReadMap(map_path);
     MeshStageResult r;
     try {
-      r = MeshJulia(map, mo);
+      r = MeshJulia(*IteratedMap(map_path, options), mo);
     } catch (const Error& x) {
       // The intricate surface is an extra: a map it cannot be made of (no inside deep enough for the
       // translation by potential) is reported, and the run goes on.
@@ -436,15 +447,15 @@ void Runner::FidelityStage(const std::string& initial_hash, const std::string& c
   set.iterations = e_.mesh.julia.iterations;
   set.escape_radius = e_.mesh.julia.escape_radius;
   set.slice = e_.mesh.julia.slice;
-  auto setup = std::make_shared<JuliaSetup>(MakeJuliaSetup(ReadMap(map_path), e_.mesh.Setup()));
+  const std::shared_ptr<const JuliaSetup> setup = IteratedMap(map_path, e_.mesh);
   set.root_translation = setup->julia.root_translation;
   QualityOptions qo;
   qo.detail = e_.mesh.detail;
-  qo.reference_frame = e_.mesh.iteration_frame == "reference";
+  qo.frame = e_.mesh.iteration_frame;
   qo.iterated = std::shared_ptr<const RationalMap>(setup, &setup->map);
   cache_.Run("fidelity", "fidelity",
-             {{"julia", JuliaJson(set, e_.mesh.iso, "double")}, {"alpha", alpha},
-              {"lattice", qo.lattice}, {"detail", qo.detail}, {"iteration_frame", e_.mesh.iteration_frame}},
+             {{"julia", JuliaJson(set, e_.mesh.iso, Precision::kDouble)}, {"alpha", alpha},
+              {"lattice", qo.lattice}, {"detail", qo.detail}, {"iteration_frame", IterationFrameName(e_.mesh.iteration_frame)}},
              {}, {initial_hash, chosen_hash}, [&](const std::string& dir) {
                // The start check of the fits is in monopoles.json already (same map, grid and alpha
                // only when the energy's alpha is the guess's: else it is made again).
@@ -490,7 +501,8 @@ void Runner::TriptychStage(const std::vector<std::string>& upstream, const std::
     }
     if (fs::exists(intricate))
       figures["intricate"] = {
-          {"fidelity", SetFidelity(map, ReadGrid(P("initial/target.qgrid")), e_.intricate, quality.lattice)}};
+          {"fidelity", SetFidelity(map, *IteratedMap(map_path, e_.intricate),
+                                   ReadGrid(P("initial/target.qgrid")), e_.intricate, quality.lattice)}};
     out["figures"] = figures;
     WriteFileAtomically(dir + "/triptych.json", out.dump(1) + "\n");
   });

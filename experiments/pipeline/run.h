@@ -37,15 +37,4 @@ struct RunSummary {
 // stopped on a signal).
 RunSummary RunExperiment(const Experiment& experiment, const RunOptions& options);
 
-// How a run ended, for report.md: complete, or where and why it stopped.
-struct RunState {
-  std::string stopped_in;  // the stage; empty: the run is complete
-  std::string reason;      // why it stopped (or that it is still running)
-  std::string resume;      // the command that continues it
-};
-
-// report.md of a run in `results` (experiments/pipeline/report.cpp).
-std::string RunReport(const Experiment& experiment, const std::vector<StageRecord>& stages, const std::string& results,
-                      double total_seconds, const RunState& state = {});
-
 }  // namespace quijibo::pipeline

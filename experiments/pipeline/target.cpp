@@ -4,8 +4,8 @@
 #include <cctype>
 #include <chrono>
 
-#include "mesh/sdf.h"
-#include "mesh/sdf_command.h"
+#include "mesh/frame_file.h"
+#include "mesh/mesh_target.h"
 #include "util/error.h"
 #include "quijibo/target.h"
 
@@ -153,17 +153,17 @@ TargetResult Target(const TargetOptions& o) {
   TargetResult t;
   if (!o.mesh.empty()) {
     const mesh::TriangleMesh user = mesh::ReadMesh(o.mesh, &t.read_report);
-    t.frame = mesh::NormalizationFor(user, o.padding, o.fractal_radius);
-    if (o.origin == mesh::OriginPlacement::kInside) {
-      t.frame = mesh::PlaceOriginInside(user, t.frame, o.mesh);
-      if (o.frame_scale == mesh::FrameScale::kTrap) t.frame = mesh::ScaleToTrap(user, t.frame, o.mesh);
-    }
-    t.mesh = mesh::ToFractalFrame(user, t.frame);
-    mesh::SdfOptions sdf;
-    sdf.name = o.mesh;
+    mesh::MeshTargetOptions mo;
+    mo.resolution = o.resolution, mo.padding = o.padding, mo.fractal_radius = o.fractal_radius, mo.box = o.box;
+    // Methods without a fractal origin (the shape modulus, portals) keep the unit frame's centre.
+    mo.origin = o.origin.value_or(mesh::OriginPlacement::kCenter);
+    mo.frame_scale = o.frame_scale;
     const auto t0 = std::chrono::steady_clock::now();
-    t.grid = mesh::SignedDistance(t.mesh, TargetGridFrame(o.resolution, t.frame, o.box), sdf);
+    mesh::MeshTargetResult made = mesh::MeshTarget(user, o.mesh, mo);
     t.sdf_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    t.frame = made.frame;
+    t.mesh = std::move(made.mesh);
+    t.grid = std::move(made.grid);
     t.source = o.mesh;
   } else if (!o.qgrid.empty()) {
     t.grid = ReadGrid(o.qgrid);

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "experiments/pipeline/settings.h"
+#include "mesh/mesh_target.h"
 #include "mesh/normalize.h"
 #include "mesh/triangle_mesh.h"
 #include "quijibo/frame.h"
@@ -21,15 +22,16 @@ struct TargetOptions {
   std::string qgrid;     // a signed distance grid (fractal frame); its .frame.json is read when present
   std::string analytic;  // "sphere[:radius=R]", "torus[:major=R,minor=r]" (and, for the shape modulus,
                          // "disc", "hexagram")
-  int resolution = kDefaultTargetResolution;  // cells per axis of the target grid
-  double padding = FractalFrame{}.padding;
-  double fractal_radius = FractalFrame{}.fractal_radius;
-  TargetBox box = TargetBox::kUnitCube;  // mesh targets
+  // Mesh targets: how the mesh becomes a target, with MeshTarget's defaults (mesh/mesh_target.h).
+  int resolution = mesh::MeshTargetOptions{}.resolution;  // cells per axis of the target grid (also analytic)
+  double padding = mesh::MeshTargetOptions{}.padding;
+  double fractal_radius = mesh::MeshTargetOptions{}.fractal_radius;
+  TargetBox box = mesh::MeshTargetOptions{}.box;
   // Mesh targets of the QUIJIBO method: where the fractal origin goes; unset for the other
   // methods (their unit frame has no fractal origin).
-  std::optional<mesh::OriginPlacement> origin = mesh::OriginPlacement::kInside;
+  std::optional<mesh::OriginPlacement> origin = mesh::MeshTargetOptions{}.origin;
   // With the origin inside: trap chooses fractal_radius (ScaleToTrap), fixed keeps the one given.
-  mesh::FrameScale frame_scale = mesh::FrameScale::kTrap;
+  mesh::FrameScale frame_scale = mesh::MeshTargetOptions{}.frame_scale;
 
   std::string kind() const;      // "mesh", "qgrid" or "analytic" ("" when none is set)
   std::string Validate() const;  // empty when valid

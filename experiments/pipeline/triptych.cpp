@@ -22,7 +22,7 @@ MeshStageOptions IntricateDefaults(const MeshStageOptions& mesh) {
   o.detail = 4.0;
   o.translate_potential = -2.0;
   o.translate = std::vector<double>{0.0, 0.0, 1.0};
-  o.iteration_frame = "map";
+  o.iteration_frame = IterationFrame::kMap;
   o.box.clear();
   o.rotation.clear();
   o.vdb = true;
@@ -30,7 +30,8 @@ MeshStageOptions IntricateDefaults(const MeshStageOptions& mesh) {
   return o;
 }
 
-json SetFidelity(const RationalMap& map, const ScalarGrid& target, const MeshStageOptions& o, int lattice) {
+json SetFidelity(const RationalMap& map, const JuliaSetup& setup, const ScalarGrid& target, const MeshStageOptions& o,
+                 int lattice) {
   // The set as the mesh shows it, without its placement (it moves the set off the target).
   mesh::FidelityOptions f;
   f.lattice = lattice;
@@ -38,12 +39,11 @@ json SetFidelity(const RationalMap& map, const ScalarGrid& target, const MeshSta
   f.julia.escape_radius = o.julia.escape_radius;
   f.julia.capture_radius = o.julia.capture_radius;
   f.julia.slice = o.julia.slice;
-  auto setup = std::make_shared<JuliaSetup>(MakeJuliaSetup(map, o.Setup()));
-  f.julia.root_translation = setup->julia.root_translation;
+  f.julia.root_translation = setup.julia.root_translation;
   f.iso = o.iso;
   f.detail = o.detail;
-  f.reference_frame = o.iteration_frame == "reference";
-  f.iterated = std::shared_ptr<const RationalMap>(setup, &setup->map);
+  f.frame = o.iteration_frame;
+  f.iterated = std::make_shared<const RationalMap>(setup.map);
   json fid = mesh::MeasureSets(map, target, f).ToJson();
   fid["lattice"] = lattice;
   fid["closing"] = f.closing;

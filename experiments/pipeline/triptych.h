@@ -27,7 +27,9 @@ MeshStageOptions IntricateDefaults(const MeshStageOptions& mesh);
 // IoU, leak), as fidelity.json holds them for the mesh stage's set. The run measures the intricate
 // surface on the Quality section's lattice (QualityOptions::lattice, 32), as the set is measured
 // there, so the two lines of figures compare.
-nlohmann::json SetFidelity(const RationalMap& map, const ScalarGrid& target, const MeshStageOptions& o, int lattice);
+// `setup` is `map` as the intricate surface iterates it (MakeJuliaSetup(map, o.Setup())).
+nlohmann::json SetFidelity(const RationalMap& map, const JuliaSetup& setup, const ScalarGrid& target,
+                           const MeshStageOptions& o, int lattice);
 
 // The three renders of the triptych into `dir`: target.png, set.png, intricate.png (each
 // `size` pixels square, one three-quarter view, framed alike on the target mesh) and

@@ -28,6 +28,7 @@
 #include "experiments/pipeline/experiment.h"
 #include "experiments/pipeline/initial.h"
 #include "experiments/pipeline/mesh.h"
+#include "experiments/pipeline/julia_set.h"
 #include "experiments/pipeline/modulus.h"
 #include "experiments/pipeline/optimize.h"
 #include "experiments/pipeline/portal.h"
@@ -46,6 +47,7 @@
 #include "quijibo/target.h"
 #include "util/error.h"
 #include "util/image.h"
+#include "util/io.h"
 #include "util/json_reader.h"
 
 namespace py = pybind11;
@@ -426,8 +428,8 @@ py::tuple OptimizeMap(const ScalarGrid& target, const RationalMap& initial, py::
   CheckMap(initial, "optimize");
   json j = ToJson(settings, "optimize");
   if (!schedule.is_none()) j["schedule"] = ToJson(schedule, "optimize/schedule");
-  pipeline::OptimizeStageOptions stage;
-  stage.optimizer = optim::OptimizeOptions::FromJson(JsonReader(j, "optimize"), "", std::filesystem::current_path());
+  pipeline::OptimizeStageOptions stage =
+      pipeline::OptimizeStageOptions::FromJson(JsonReader(j, "optimize"), "", std::filesystem::current_path(), false);
   if (out.is_none() && resume) throw Error("optimize: resume=True needs the folder of the interrupted run (out=...)");
   const std::string out_dir = out.is_none() ? "" : ToJson(out, "optimize/out").get<std::string>();
   std::unique_ptr<PythonCallback> observer;
@@ -588,6 +590,24 @@ ProductHandle Portal(py::object out, py::kwargs kwargs) {
   return FromProduct(r.product, r.report);
 }
 
+// The Julia set of a map of any kind (methods/map_kind.h), as `quijibo julia` and the "julia"
+// experiment method make it; out= decides 2D or 3D by its extension, as the command's -o does.
+ProductHandle JuliaSetOf(py::object map, py::object out, py::kwargs kwargs) {
+  json settings = ToJson(kwargs, "julia");
+  settings["map"] = ToJson(map, "julia/map");
+  pipeline::JuliaSetStageOptions options =
+      pipeline::JuliaSetStageOptions::FromJson(JsonReader(settings, "julia"), "", std::filesystem::current_path());
+  const std::string path = OptionalPath(out, "julia." + options.output.format);
+  if (!out.is_none()) options.output.format = HasExtension(path, ".ply") ? "ply" : "png";
+  pipeline::JuliaSetStageResult r;
+  {
+    py::gil_scoped_release release;
+    r = pipeline::JuliaSet(options);
+    if (!out.is_none()) pipeline::WriteProduct(r.product, path);
+  }
+  return FromProduct(r.product, r.report);
+}
+
 // ---------------------------------------------------------------------------------------------
 // run
 
@@ -615,43 +635,8 @@ py::dict Run(py::object experiment, py::object out, bool resume, bool check, boo
   return FromJson({{"results", s.results}, {"seconds", s.seconds}, {"stages", stages}, {"resolved", s.resolved}});
 }
 
-}  // namespace
-}  // namespace quijibo::python
-
-PYBIND11_MODULE(quijibo, m) {
-  using namespace quijibo;
-  using namespace quijibo::python;
-  m.doc() =
-      "quijibo: quaternion Julia sets shaped like a mesh (QUIJIBO, Kim 2015), from Python.\n"
-      "Maps, grids, the energy, the initial guess, the optimizer and the mesher on NumPy arrays; see "
-      "docs/python.md.";
-  m.attr("__version__") = QUIJIBO_VERSION;
-
-  // quijibo.Error: the one exception; its message is the line the command line prints.
-  static PyObject* error_type =
-      PyErr_NewExceptionWithDoc("quijibo.Error",
-                                "A quijibo error: the message names the file (and line or JSON pointer) and says "
-                                "what was expected, as the command line prints it.",
-                                PyExc_Exception, nullptr);
-  m.attr("Error") = py::handle(error_type);
-  py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const Error& e) {
-      PyErr_SetString(error_type, e.what());
-    } catch (const py::error_already_set&) {
-      throw;
-    } catch (const py::builtin_exception&) {
-      throw;
-    } catch (const std::bad_alloc&) {
-      throw;
-    } catch (const std::exception& e) {
-      // Library exceptions the command line also prints as errors (JSON, file system).
-      PyErr_SetString(error_type, e.what());
-    }
-  });
-
-  // ----- frames
+// Frames.
+void BindFrames(py::module_& m) {
   py::class_<FractalFrame>(m, "Frame",
                            "The user -> normalized -> fractal frame (quijibo/frame.h): w = fractal_radius * "
                            "(scale * x + translation - origin).")
@@ -684,8 +669,10 @@ PYBIND11_MODULE(quijibo, m) {
                ", origin=(" + std::to_string(f.origin[0]) + ", " + std::to_string(f.origin[1]) + ", " +
                std::to_string(f.origin[2]) + "))";
       });
+}
 
-  // ----- rational maps
+// Rational maps.
+void BindMaps(py::module_& m) {
   py::class_<RationalMap>(m, "RationalMap",
                           "R(q) = e^C T(q) B(q)^-1 (2015 Eqns 4, 8; quijibo/rational_map.h). Roots are (R, 4) "
                           "arrays of quaternions (real, i, j, k) in the fractal frame; arrays read back are "
@@ -801,8 +788,10 @@ PYBIND11_MODULE(quijibo, m) {
       py::arg("leading_zero_roots") = RandomMapOptions{}.leading_zero_roots,
       py::arg("seed") = RandomMapOptions{}.seed,
       "A seeded random map (`quijibo map random`): roots uniform in a ball on k = 0, exponents uniform.");
+}
 
-  // ----- grids
+// Grids.
+void BindGrids(py::module_& m) {
   py::class_<ScalarGrid>(m, "Grid",
                          "Values at the cell centres of a regular grid (quijibo/grid.h): values[i, j, k] at "
                          "min_corner + spacing * (i + 1/2, j + 1/2, k + 1/2).")
@@ -876,8 +865,10 @@ PYBIND11_MODULE(quijibo, m) {
         "The target stage of an experiment (its `target` object's keys): exactly one of mesh= (.obj, .ply, .stl, "
         ".off: normalized, origin placed, its signed distance on the target grid), qgrid= (a .qgrid) or analytic= "
         "('sphere[:radius=R]', 'torus[:major=R,minor=r]'); resolution=, padding=, fractal_radius=, box=, origin=.");
+}
 
-  // ----- energy
+// Energy.
+void BindEnergy(py::module_& m) {
   py::class_<EnergyResult>(m, "EnergyResult", "psi and its gradient (quijibo/energy.h)")
       .def_readonly("energy", &EnergyResult::energy, "psi: the same double `quijibo energy` prints")
       .def_readonly("gradient", &EnergyResult::gradient,
@@ -897,7 +888,7 @@ PYBIND11_MODULE(quijibo, m) {
         py::arg("alpha") = energy_defaults.energy.alpha, py::arg("evaluator") = energy_defaults.evaluator,
         py::arg("precision") = PrecisionName(energy_defaults.precision),
         py::arg("weights") = WeightFieldName(energy_defaults.weights), py::arg("resolution") = energy_defaults.resolution,
-        py::arg("level_weights") = optim::LevelWeightsName(energy_defaults.level_weights),
+        py::arg("level_weights") = LevelWeightsName(energy_defaults.level_weights),
         py::arg("slice") = energy_defaults.slice,
         py::arg("mode") = std::string(energy_defaults.mode == EnergyMode::kFull ? "full" : "variable"),
         py::arg("gradient") = energy_defaults.gradient, py::arg("storage") = StorageName(energy_defaults.storage),
@@ -906,8 +897,10 @@ PYBIND11_MODULE(quijibo, m) {
         "energy`: evaluator dense (log-linear, exact, double; also: loglinear) or cached (the paper's, any "
         "precision), weights layer/inverse/balanced, resolution 0 = the target's own grid, mode full or variable "
         "(V pass).");
+}
 
-  // ----- initial guess
+// Initial guess.
+void BindInitialGuess(py::module_& m) {
   py::class_<InitialGuessHandle>(m, "InitialGuess",
                                  "The initial map and its target; unpacks as (map, target grid).")
       .def_readonly("map", &InitialGuessHandle::map)
@@ -930,8 +923,10 @@ PYBIND11_MODULE(quijibo, m) {
         "(kind='monopoles'; epsilon=, fit_target=, amplitude=, ...); the target grid's settings (resolution=, "
         "padding=, fractal_radius=, box=, origin=) as the experiment's target. Returns an InitialGuess: "
         "(map, target grid).");
+}
 
-  // ----- mesh
+// Mesh.
+void BindMesh(py::module_& m) {
   py::class_<MeshResult>(m, "Mesh", "A triangle mesh: vertices (N, 3), faces (M, 3); unpacks as (vertices, faces)")
       .def(py::init([](const Array& v, const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& f) {
              return FromTriangleMesh(ToTriangleMesh(v, f), py::dict());
@@ -977,7 +972,10 @@ PYBIND11_MODULE(quijibo, m) {
       py::arg("mesh"), py::arg("path"), py::kw_only(), py::arg("double") = false,
       "Write a Mesh (or a (vertices, faces) pair) as binary PLY (float, or double with double=True) or OBJ, "
       "atomically.");
-  // ----- shape modulus, portals, experiments
+}
+
+// Shape modulus, portals, experiments.
+void BindStages(py::module_& m) {
   py::class_<ProductHandle>(m, "Product", "A shape modulus or portal result: a Mesh (3D) or an image (2D)")
       .def_readonly("kind", &ProductHandle::kind, "'ply' (mesh) or 'png' (image)")
       .def_readonly("mesh", &ProductHandle::mesh, "3D: the Mesh (unit frame)")
@@ -991,6 +989,11 @@ PYBIND11_MODULE(quijibo, m) {
   m.def("portal", &Portal, py::kw_only(), py::arg("out") = py::none(),
         "Portals (Schor and Kim 2024; `quijibo portal`, the experiment's portal stage): spec= (a file or a dict) "
         "or koch=True, alpha=, output={'format': 'png' or 'ply', ...}; with out= also written.");
+  m.def("julia", &JuliaSetOf, py::arg("map"), py::kw_only(), py::arg("out") = py::none(),
+        "The Julia set of a map of any kind (`quijibo julia`, the experiment method \"julia\"; docs/map-kinds.md): "
+        "map= a map object as a dict ({'kind': 'polynomial', 'c': [...]}, {'kind': 'rational', 'file': ...}) or the "
+        "path of a JSON file holding one; output={'format': 'png' or 'ply', 'resolution': ..., 'iterations': ..., "
+        "...} (iterations, escape and box default to the kind's); with out= (.ply or .png) also written.");
   m.def("run", &Run, py::arg("experiment"), py::kw_only(), py::arg("out") = py::none(),
         py::arg("resume") = pipeline::RunOptions{}.resume, py::arg("check") = pipeline::RunOptions{}.check_only,
         py::arg("quiet") = pipeline::RunOptions{}.quiet,
@@ -1038,4 +1041,49 @@ PYBIND11_MODULE(quijibo, m) {
       "shadows and a ground (render_shading='flat': the z-buffer and Lambert shading). Settings as keywords with "
       "the experiment's pictures names: render_size (pixels per view), render_views (1-4: front, side, top, "
       "three-quarter), render_shading, render_samples, render_ao_rays. Returns an (H, W, 3) uint8 array.");
+}
+
+}  // namespace
+}  // namespace quijibo::python
+
+PYBIND11_MODULE(quijibo, m) {
+  using namespace quijibo;
+  using namespace quijibo::python;
+  m.doc() =
+      "quijibo: quaternion Julia sets shaped like a mesh (QUIJIBO, Kim 2015), from Python.\n"
+      "Maps, grids, the energy, the initial guess, the optimizer and the mesher on NumPy arrays; see "
+      "docs/python.md.";
+  m.attr("__version__") = QUIJIBO_VERSION;
+
+  // quijibo.Error: the one exception; its message is the line the command line prints.
+  static PyObject* error_type =
+      PyErr_NewExceptionWithDoc("quijibo.Error",
+                                "A quijibo error: the message names the file (and line or JSON pointer) and says "
+                                "what was expected, as the command line prints it.",
+                                PyExc_Exception, nullptr);
+  m.attr("Error") = py::handle(error_type);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const Error& e) {
+      PyErr_SetString(error_type, e.what());
+    } catch (const py::error_already_set&) {
+      throw;
+    } catch (const py::builtin_exception&) {
+      throw;
+    } catch (const std::bad_alloc&) {
+      throw;
+    } catch (const std::exception& e) {
+      // Library exceptions the command line also prints as errors (JSON, file system).
+      PyErr_SetString(error_type, e.what());
+    }
+  });
+
+  BindFrames(m);
+  BindMaps(m);
+  BindGrids(m);
+  BindEnergy(m);
+  BindInitialGuess(m);
+  BindMesh(m);
+  BindStages(m);
 }

@@ -29,7 +29,7 @@ MapKind MapKind_rational() {
     const std::string frame = r.string_or(p + "/iteration_frame", "map");
     if (frame != "map" && frame != "reference") r.fail(p + "/iteration_frame", "expected \"map\" or \"reference\"");
     JuliaSetupOptions setup;
-    setup.reference_frame = frame == "reference";
+    setup.frame = ParseIterationFrame(frame);
     setup.detail = detail;
     const RationalMap map = MakeJuliaSetup(ReadMap(file.string()), setup).map;
     auto rm = std::make_shared<RationalQuaternionMap>(map);

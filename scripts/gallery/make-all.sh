@@ -14,11 +14,11 @@ declare -A FIG=(
   [2015-6]="qj2015_bunny.py" [2015-7]="qj2015_weights.py" [2015-8]="qj2015_potential.py"
   [2023-2]="sm2023_tooth.py 2" [2023-3]="sm2023_tooth.py 3" [2023-8]="sm2023_average.py"
   [2023-9]="sm2023_bunny.py 9" [2023-10]="sm2023_bunny.py 10" [2023-11]="sm2023_bunny.py 11"
-  [2023-12]="sm2023_bunny.py 12" [2024-3]="portals2024.py 3" [2024-7]="portals2024.py 7"
+  [2023-12]="sm2023_bunny.py 12" [2024-2]="portals2024.py 2" [2024-3]="portals2024.py 3" [2024-7]="portals2024.py 7"
   [2024-8]="portals2024.py 8"
 )
 ORDER=(2015-3 2015-4 2015-5 2015-6 2015-7 2015-8 2023-2 2023-3 2023-8 2023-9 2023-10 2023-11 2023-12
-       2024-3 2024-7 2024-8)
+       2024-2 2024-3 2024-7 2024-8)
 [ $# -gt 0 ] && ORDER=("$@")
 start=$SECONDS
 for f in "${ORDER[@]}"; do

@@ -306,15 +306,15 @@ TEST(WeightsTest, WallDepthSaysWhetherATargetIsThinWalled) {
   const ScalarGrid thin = AnalyticTarget("sphere", GridFrame::Cube(24, {0, 0, 0}, 6.0));
   EXPECT_NEAR(WallDepthCells(thick), 0.536 * 10, 0.25);  // within a quarter cell of the continuous ball
   EXPECT_NEAR(WallDepthCells(thin), 0.536 * 4, 0.25);
-  EXPECT_FALSE(ThinWallsOn(ThinWallSwitch::kAuto, thick));
-  EXPECT_TRUE(ThinWallsOn(ThinWallSwitch::kAuto, thin));
-  EXPECT_TRUE(ThinWallsOn(ThinWallSwitch::kOn, thick));
-  EXPECT_FALSE(ThinWallsOn(ThinWallSwitch::kOff, thin));
+  EXPECT_FALSE(ThinWallsOn(AutoSwitch::kAuto, thick));
+  EXPECT_TRUE(ThinWallsOn(AutoSwitch::kAuto, thin));
+  EXPECT_TRUE(ThinWallsOn(AutoSwitch::kOn, thick));
+  EXPECT_FALSE(ThinWallsOn(AutoSwitch::kOff, thin));
   ScalarGrid empty = thin;
   for (double& v : empty.values) v = 1.0;
   EXPECT_EQ(WallDepthCells(empty), 0.0);
-  for (const std::string& name : kThinWallSwitchNames) EXPECT_EQ(ThinWallSwitchName(ParseThinWallSwitch(name)), name);
-  EXPECT_THROW(ParseThinWallSwitch("yes"), Error);
+  for (const std::string& name : kAutoSwitchNames) EXPECT_EQ(AutoSwitchName(ParseAutoSwitch(name)), name);
+  EXPECT_THROW(ParseAutoSwitch("yes"), Error);
 }
 
 }  // namespace

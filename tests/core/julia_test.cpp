@@ -251,7 +251,7 @@ TEST(Julia, DetailWidensTheBandAboutTheSurfaceAndKeepsTheOneStepSet) {
   EXPECT_THROW(WithDetail(m, -1.0), Error);
   EXPECT_THROW(WithDetail(m, std::nan("")), Error);
   // The iteration map: detail, then the reference frame.
-  const RationalMap r = IterationMap(m, true, 10.0);
+  const RationalMap r = IterationMap(m, IterationFrame::kReference, 10.0);
   EXPECT_EQ(r.frame.fractal_radius, 4.0);
   EXPECT_NEAR(r.tau, d.tau, 1e-15);
 }

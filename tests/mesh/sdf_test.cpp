@@ -216,7 +216,7 @@ TEST(SdfCommand, WritesFieldFrameAndVdb) {
   o.input = QUIJIBO_SOURCE_DIR "/data/bunny.obj";
   o.output = dir.file("bunny.qgrid");
   o.vdb_output = dir.file("bunny.vdb");
-  o.resolution = 25;
+  o.target.resolution = 25;
   o.quiet = true;
   RunSdfCommand(o);
   EXPECT_EQ(dir.count(), 3u);
@@ -250,7 +250,7 @@ TEST(SdfCommand, FailureLeavesNoOutput) {
   SdfCommandOptions o;
   o.output = dir.file("out.qgrid");
   o.vdb_output = dir.file("out.vdb");
-  o.resolution = 20;
+  o.target.resolution = 20;
   o.quiet = true;
   // Unreadable input, a mesh that bounds nothing, and an output folder that cannot be created.
   o.input = dir.write("in.xyz", "v 0 0 0\n");
@@ -278,7 +278,7 @@ TEST(SdfCommand, FailureLeavesNoOutput) {
   o.vdb_output = dir.file("new/a.ply");
   EXPECT_EQ(message(), "sdf: " + o.vdb_output + ": --vdb must end in .vdb");
   EXPECT_EQ(dir.count(), 2u);
-  o.resolution = 1;
+  o.target.resolution = 1;
   o.vdb_output.clear();
   EXPECT_THROW(RunSdfCommand(o), Error);
 }

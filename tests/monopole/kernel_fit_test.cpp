@@ -108,7 +108,7 @@ TEST(KernelFit, RefinementAddsRootsWhereTheFitIsWrong) {
   KernelFitOptions o;
   o.roots = 16;
   o.origin_root = false;
-  o.thin_walls = ThinWallSwitch::kOff;  // few roots as set: the thin-wall rule has its own test
+  o.thin_walls = AutoSwitch::kOff;  // few roots as set: the thin-wall rule has its own test
   const auto [plain, refined] = FitBeforeAndAfter(t, o, [](KernelFitOptions& x) { x.refine_rounds = 2; });
   EXPECT_EQ(plain.summary.refine_rounds, 0);
   EXPECT_GE(refined.summary.refine_rounds, 1);
@@ -180,7 +180,7 @@ TEST(KernelFit, ThinPartsGetDenserRootPairsAndTheSpacingRuleSetsTheCount) {
   o.offset_cells = 4;  // the plate, 3 cells thick, shortens its pairs' offsets below 1.5 cells
   o.origin_root = false;
   o.roots = o.max_roots = 200;
-  o.thin_walls = ThinWallSwitch::kOff;  // the spacing rule as set: the thin-wall rule has its own test
+  o.thin_walls = AutoSwitch::kOff;  // the spacing rule as set: the thin-wall rule has its own test
   const RationalMap m = Fit(t, o);
   EXPECT_EQ(m.root_count(), 200);
   int near_plate = 0;
@@ -214,21 +214,21 @@ TEST(KernelFit, ThinWallsDensifyThePairsOnAThinWalledTargetOnly) {
   KernelFitOptions o;
   o.roots = 16;
   o.max_roots = 400;
-  o.thin_walls = ThinWallSwitch::kOff;
+  o.thin_walls = AutoSwitch::kOff;
   const TwoSpheres thin = MakeTwoSpheres(0.4, 0.4);
   EXPECT_LT(WallDepthCells(thin.sdf), kThinWallDepthCells);
-  const auto [off, on] = FitBeforeAndAfter(thin, o, [](KernelFitOptions& x) { x.thin_walls = ThinWallSwitch::kAuto; });
+  const auto [off, on] = FitBeforeAndAfter(thin, o, [](KernelFitOptions& x) { x.thin_walls = AutoSwitch::kAuto; });
   EXPECT_FALSE(off.summary.thin_walls);
   EXPECT_TRUE(on.summary.thin_walls);
   EXPECT_DOUBLE_EQ(on.summary.spacing, 0.6 * off.summary.spacing);
   EXPECT_GT(on.map.root_count(), 2 * off.map.root_count());
   EXPECT_NEAR(on.summary.wall_depth_cells, WallDepthCells(thin.sdf), 0.0);
 
-  o.thin_walls = ThinWallSwitch::kOff;
+  o.thin_walls = AutoSwitch::kOff;
   const TwoSpheres thick = MakeTwoSpheres(0.9, 0.9);
   EXPECT_GT(WallDepthCells(thick.sdf), kThinWallDepthCells);
   const auto [plain, automatic] =
-      FitBeforeAndAfter(thick, o, [](KernelFitOptions& x) { x.thin_walls = ThinWallSwitch::kAuto; });
+      FitBeforeAndAfter(thick, o, [](KernelFitOptions& x) { x.thin_walls = AutoSwitch::kAuto; });
   EXPECT_FALSE(automatic.summary.thin_walls);
   EXPECT_EQ(automatic.map.variables(), plain.map.variables());
   EXPECT_EQ(automatic.map.top_roots, plain.map.top_roots);

@@ -15,7 +15,7 @@ namespace {
 // third run keeps no matrix (on-the-fly storage, as beyond ~100^3): its band anchors on blocks and
 // its absolute energies go through a band too; the same psi again. With between_nodes each grid's
 // band checks its own share of the two-grid energy.
-void BandAndDenseRunsEndAtTheSamePsi(ThinWallSwitch between_nodes) {
+void BandAndDenseRunsEndAtTheSamePsi(AutoSwitch between_nodes) {
   const ScalarGrid sdf = AnalyticTarget("torus", GridFrame::Cube(24, {0, 0, 0}, 3.0));
   RandomMapOptions ro;
   ro.top = 12;
@@ -30,7 +30,7 @@ void BandAndDenseRunsEndAtTheSamePsi(ThinWallSwitch between_nodes) {
   const char* names[3] = {"band", "dense", "band"};
   std::string dirs[3];
   for (int k = 0; k < 3; ++k) {
-    dirs[k] = TempDir(std::string("band_") + names[k] + std::to_string(k) + ThinWallSwitchName(between_nodes));
+    dirs[k] = TempDir(std::string("band_") + names[k] + std::to_string(k) + AutoSwitchName(between_nodes));
     OptimizeOptions o = ScheduleAsWritten("12(VFRF)24(VF)", 30, dirs[k]);
     o.between_nodes = between_nodes;
     // This random start scores worse than the empty set (absolute psi > 0) and its passes lower psi
@@ -51,7 +51,7 @@ void BandAndDenseRunsEndAtTheSamePsi(ThinWallSwitch between_nodes) {
     EXPECT_EQ(band.iterations, dense.iterations) << p;
     // The band reports itself; the dense run does not.
     ASSERT_TRUE(band.band.is_object()) << p;
-    EXPECT_EQ(band.band.contains("corners"), between_nodes == ThinWallSwitch::kOn) << p;
+    EXPECT_EQ(band.band.contains("corners"), between_nodes == AutoSwitch::kOn) << p;
     EXPECT_TRUE(dense.band.is_null()) << p;
     EXPECT_LE(band.band["energy_error"].get<double>(), 1e-12) << p;
     EXPECT_GE(band.band["anchors"].get<long long>(), 1) << p;
@@ -82,10 +82,10 @@ void BandAndDenseRunsEndAtTheSamePsi(ThinWallSwitch between_nodes) {
   for (const std::string& d : dirs) std::filesystem::remove_all(d);
 }
 
-TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) { BandAndDenseRunsEndAtTheSamePsi(ThinWallSwitch::kOff); }
+TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsi) { BandAndDenseRunsEndAtTheSamePsi(AutoSwitch::kOff); }
 
 TEST(BandOptimizerTest, BandAndDenseRunsEndAtTheSamePsiBetweenTheNodes) {
-  BandAndDenseRunsEndAtTheSamePsi(ThinWallSwitch::kOn);
+  BandAndDenseRunsEndAtTheSamePsi(AutoSwitch::kOn);
 }
 
 TEST(BandOptimizerTest, EvaluatorNamesResolve) {

@@ -50,7 +50,7 @@ TEST_P(BetweenNodesEnergy, IsTheEtaWeightedSumOfTheNodesAndTheCorners) {
   const SmallRun run;
   OptimizeOptions o;
   o.evaluator = GetParam();
-  o.between_nodes = ThinWallSwitch::kOn;
+  o.between_nodes = AutoSwitch::kOn;
   const Eigen::VectorXd x = run.map.variables();
   Objective both(run.sdf, run.map, o);
   const std::vector<double> w = ComputeWeights(run.sdf, o.weights);
@@ -71,7 +71,7 @@ TEST_P(BetweenNodesEnergy, IsTheEtaWeightedSumOfTheNodesAndTheCorners) {
   EXPECT_LT((e.gradient - g).lpNorm<Eigen::Infinity>(), 1e-10 * g.lpNorm<Eigen::Infinity>());
   EXPECT_EQ(e.counts.cells, nodes.frame.cell_count() + corners.frame.cell_count());
   // Off, psi is the nodes' alone.
-  o.between_nodes = ThinWallSwitch::kOff;
+  o.between_nodes = AutoSwitch::kOff;
   Objective nodes_only(run.sdf, run.map, o);
   EXPECT_NEAR(nodes_only.Absolute(x), a.energy - TrivialSetEnergy({&nodes}), 1e-12 * std::abs(a.energy));
 }
@@ -85,10 +85,10 @@ TEST(BetweenNodesRun, MinimizesTheTwoGridEnergy) {
   OptimizeOptions o;
   o.max_iterations = {6, 20, 8};
   o.schedule = o.ScheduleFromNotation("20(VF)");
-  o.between_nodes = ThinWallSwitch::kOff;
+  o.between_nodes = AutoSwitch::kOff;
   RationalMap plain = run.map;
   const OptimizeSummary s0 = Optimize(run.sdf, plain, o);
-  o.between_nodes = ThinWallSwitch::kOn;
+  o.between_nodes = AutoSwitch::kOn;
   RationalMap staggered = run.map;
   const OptimizeSummary s1 = Optimize(run.sdf, staggered, o);
   ASSERT_TRUE(s0.complete);
@@ -110,8 +110,8 @@ TEST(BetweenNodesRun, AutoIsOnForAThinWalledTargetOnlyAndTheDefaultForEvery) {
   OptimizeOptions o;
   o.max_iterations = {2, 2, 2};
   o.schedule = o.ScheduleFromNotation("20(V)");
-  ASSERT_EQ(o.between_nodes, ThinWallSwitch::kOn);  // the default: on for every target
-  o.between_nodes = ThinWallSwitch::kAuto;
+  ASSERT_EQ(o.between_nodes, AutoSwitch::kOn);  // the default: on for every target
+  o.between_nodes = AutoSwitch::kAuto;
   RationalMap a = run.map;
   EXPECT_TRUE(Optimize(run.sdf, a, o).between_nodes);
   const ScalarGrid fine = AnalyticTarget("torus", GridFrame::Cube(60, {0, 0, 0}, 3.0));

@@ -187,16 +187,16 @@ TEST(ObjectiveTrivialSets, ScoreNoBetterThanZeroInEveryWeightMode) {
   far.top_roots = {{100, 0, 0, 0}};
   far.top_exponents = {1.0};
   for (WeightField w : {WeightField::kLayer, WeightField::kInverse, WeightField::kBalanced})
-    for (ThinWallSwitch corners : {ThinWallSwitch::kOff, ThinWallSwitch::kOn}) {
+    for (AutoSwitch corners : {AutoSwitch::kOff, AutoSwitch::kOn}) {
       OptimizeOptions o;
       o.weights = w;
       o.between_nodes = corners;
       Objective objective(run.sdf, far, o);
       Eigen::VectorXd x = far.variables();
       x[0] = 20;  // L = 20 + log|q - r| > 0 on the grid: the empty set
-      EXPECT_GE(objective.Absolute(x), -1e-12) << WeightFieldName(w) << " " << ThinWallSwitchName(corners);
+      EXPECT_GE(objective.Absolute(x), -1e-12) << WeightFieldName(w) << " " << AutoSwitchName(corners);
       x[0] = -20;  // L < 0: the full box
-      EXPECT_GE(objective.Absolute(x), -1e-12) << WeightFieldName(w) << " " << ThinWallSwitchName(corners);
+      EXPECT_GE(objective.Absolute(x), -1e-12) << WeightFieldName(w) << " " << AutoSwitchName(corners);
     }
 }
 

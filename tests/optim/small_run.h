@@ -65,7 +65,7 @@ inline OptimizeOptions ScheduleAsWritten(const std::string& notation, std::optio
   OptimizeOptions o;
   o.schedule = Schedule::Parse(notation);
   o.min_level_fidelity = 0;
-  o.between_nodes = ThinWallSwitch::kOff;
+  o.between_nodes = AutoSwitch::kOff;
   if (max_iterations)
     for (auto& l : o.schedule.levels)
       for (auto& p : l.passes) p.max_iterations = *max_iterations;

@@ -76,7 +76,7 @@ TEST(FrameScale, TheStartsOneStepSetDoesNotDependOnTheScale) {
 
   InitialGuessStageOptions guess;
   guess.kernel.roots = guess.kernel.max_roots = 40;
-  guess.kernel.thin_walls = ThinWallSwitch::kOff;  // 40 roots as set: the thin-wall rule has tests of its own
+  guess.kernel.thin_walls = AutoSwitch::kOff;  // 40 roots as set: the thin-wall rule has tests of its own
   const RationalMap a = InitialGuess(fixed, guess).map, b = InitialGuess(trap, guess).map;
   std::int64_t cells = 0, same = 0, inside = 0;
   for (std::int64_t c = 0; c < fixed.grid.frame.cell_count(); ++c) {

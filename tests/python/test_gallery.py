@@ -114,3 +114,25 @@ def test_gallery_scripts_at_test_scale(tmp_path):
     for name in ["2015-fig3", "2015-fig7", "2023-fig8", "2023-fig12", "2024-fig3", "2024-fig7"]:
         png = tmp_path / "img" / f"{name}.png"
         assert png.exists() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+
+
+@pytest.mark.parametrize("level", [1, 2])
+def test_menger_sponge_mesh_is_closed_outward_and_has_its_volume(tmp_path, level):
+    """2024 Fig. 2's sponge (scripts/gallery/portals2024.py): every edge shared by two triangles,
+    the faces wound outwards, and the enclosed volume (20/27)^level of the unit cube."""
+    import sys
+    sys.path.insert(0, str(SOURCE_DIR / "scripts" / "gallery"))
+    import portals2024
+    path = tmp_path / "sponge.ply"
+    triangles = portals2024.menger_mesh(level, path)
+    data = path.read_bytes()
+    start = data.index(b"end_header\n") + len(b"end_header\n")
+    nv = int(data.split(b"element vertex ")[1].split(b"\n")[0])
+    v = np.frombuffer(data[start:start + 12 * nv], "<f4").reshape(-1, 3).astype(np.float64)
+    t = np.frombuffer(data[start + 12 * nv:], dtype=[("n", "u1"), ("i", "<i4", 3)])["i"]
+    assert len(t) == triangles
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    assert np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6 == pytest.approx((20 / 27) ** level, rel=1e-6)
+    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    _, count = np.unique(edges, axis=0, return_counts=True)
+    assert set(count.tolist()) == {2}

@@ -68,3 +68,23 @@ def test_run_equals_quijibo_run(tmp_path):
     bad = dict(TINY_EXPERIMENT, mesh={"resolutoin": 24})
     with pytest.raises(quijibo.Error, match=r'experiment: /mesh/resolutoin: unknown key'):
         quijibo.run(bad, check=True)
+
+
+def test_julia_of_a_map_kind_equals_quijibo_julia(tmp_path):
+    """Any map kind from Python, as `quijibo julia` makes it: the basilica (q^2 - 1) as a picture and a mesh."""
+    basilica = {"kind": "polynomial", "c": [-1.0, 0.0]}
+    path = tmp_path / "basilica.json"
+    path.write_text(json.dumps(basilica))
+    image = quijibo.julia(basilica, output={"png_size": 64}, out=str(tmp_path / "b.png"))
+    assert image.kind == "png" and image.image.shape == (64, 64, 3)
+    run_cli("julia", path, "-o", tmp_path / "b-cli.png", "--png-size", 64)
+    assert (tmp_path / "b-cli.png").read_bytes() == (tmp_path / "b.png").read_bytes()
+    # Inside and outside both drawn: the filled set is neither empty nor the whole picture.
+    assert len(np.unique(image.image.reshape(-1, 3), axis=0)) >= 2
+    mesh = quijibo.julia(str(path), output={"format": "ply", "resolution": 24})
+    assert mesh.kind == "ply"
+    run_cli("julia", path, "-o", tmp_path / "b.ply", "-r", 24)
+    v, f = quijibo.read_mesh(str(tmp_path / "b.ply"))
+    assert mesh.mesh.vertices.shape == v.shape and mesh.mesh.faces.shape == f.shape
+    with pytest.raises(quijibo.Error, match="kind"):
+        quijibo.julia({"kind": "no-such-kind"})
