@@ -192,6 +192,7 @@ std::vector<double> TileNodeValues(const BatchField& field, const MeshLattice& l
 struct PendingVertex {
   Vec3 a, b;
   double fa, fb;
+  int kept = 0;  // false position: the end the last step kept (+1 a, -1 b, 0 none yet)
 };
 
 // The triangles of the active cells by the case table into `out` (with each vertex's global edge
@@ -245,10 +246,13 @@ std::vector<PendingVertex> TileTriangles(const Geometry& geo, const std::array<i
   return pending;
 }
 
-// Bisection on all crossing edges of the tile at once, then o.secant_steps false-position steps;
-// each vertex is its edge's last midpoint, or with o.bisection_interpolate or secant steps the point
-// where the line through the last bracket's end values crosses iso (the midpoint when an end value
-// is not finite).
+// Bisection on all crossing edges of the tile at once, then o.secant_steps false-position steps
+// (Illinois variant: when a step keeps the same end as the step before, that end's value is moved
+// halfway to iso, so that a bracket on a curved field still shrinks from both sides); each vertex is
+// its edge's last evaluated point, or with o.bisection_interpolate or secant steps the point where
+// the line through the last bracket's end values crosses iso (the midpoint when an end value is not
+// finite). Every step costs one evaluation per open edge; false position needs no more state than
+// the bracket, so seam edges stay bit-identical between tiles.
 void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vector<PendingVertex>& pending,
                     Counters& counters, TilePiece& out) {
   const double iso = field.iso;
@@ -288,13 +292,22 @@ void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vecto
       out.vertex_positions[open[q]] = mid[q];
       if (std::abs(fm[q] - iso) < o.bisection_tolerance) {
         done[open[q]] = 1;
-      } else if (Inside(fm[q], iso) == Inside(p.fa, iso)) {
+        continue;
+      }
+      const int keep = Inside(fm[q], iso) == Inside(p.fa, iso) ? -1 : +1;  // the new point replaces a: b is kept
+      if (keep < 0) {
         p.a = mid[q];
         p.fa = fm[q];
       } else {
         p.b = mid[q];
         p.fb = fm[q];
       }
+      if (!secant) continue;
+      if (keep == p.kept) {  // Illinois: the same end kept twice in a row
+        double& f = keep > 0 ? p.fa : p.fb;
+        if (std::isfinite(f)) f = iso + 0.5 * (f - iso);
+      }
+      p.kept = keep;
     }
   }
   if (!o.bisection_interpolate && o.secant_steps == 0) return;
@@ -339,9 +352,13 @@ std::string MeshingOptions::Validate() const {
   }
   if (auto why = CheckRange("resolution", SettingType::kInteger, resolution, kResolutionRange); !why.empty())
     return why;
-  if (bisection_steps < (bisection_interpolate ? 0 : 1) || bisection_steps > 60)
-    return bisection_interpolate ? "bisection steps must be in [0, 60]" : "bisection steps must be in [1, 60]";
   if (secant_steps < 0 || secant_steps > 8) return "secant steps must be in [0, 8]";
+  // The vertex is interpolated in its last bracket with bisection_interpolate or secant steps: the
+  // bisection steps may then be 0.
+  const bool interpolated = bisection_interpolate || secant_steps > 0;
+  if (bisection_steps < (interpolated ? 0 : 1) || bisection_steps > 60)
+    return interpolated ? "bisection steps must be in [0, 60]"
+                        : "bisection steps must be in [1, 60] (0 only with --bisection-interpolate or secant steps)";
   if (!(bisection_tolerance >= 0) || !std::isfinite(bisection_tolerance)) return "bisection tolerance must be finite and >= 0";
   if (!pow2(block_cells)) return "block cells must be a power of 2";
   if (!pow2(search_stride) || search_stride < block_cells) return "search stride must be a power of 2 >= block cells";
