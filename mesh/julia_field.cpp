@@ -27,13 +27,13 @@ void RecordBatch(const JuliaResult<Real>* r, std::size_t n, double* values, Juli
 }  // namespace
 
 BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, double iso, Precision precision,
-                          JuliaFieldStats* stats, JuliaKernel kernel) {
+                          JuliaFieldStats* stats, JuliaKernel kernel, VectorIsa max_isa) {
   BatchField field;
   field.iso = iso;
   field.value_margin = kLogModulusValueMargin;
   field.log_modulus = true;
   if (precision == Precision::kDouble && kernel != JuliaKernel::kScalar) {
-    auto jb = std::make_shared<const JuliaBatch>(map, options, true, kernel == JuliaKernel::kFused);
+    auto jb = std::make_shared<const JuliaBatch>(map, options, kernel, max_isa);
     field.evaluate = [jb, stats](const Vec3* points, std::size_t n, double* values) {
       std::vector<JuliaResult<double>> r(n);
       jb->At(points, n, r.data());

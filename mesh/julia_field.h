@@ -28,11 +28,12 @@ struct JuliaFieldStats {
 };
 
 // Throws quijibo::Error when the map or the options are invalid. `stats` may be null; it must
-// outlive the field. In double precision `kernel` picks the vectorized kernel (JuliaBatch, the
-// default) or the scalar reference (JuliaMap); other precisions are always scalar.
+// outlive the field. In double precision `kernel` picks a vectorized kernel (JuliaBatch: vector,
+// the default, fused or float; its instruction set capped by `max_isa`) or the scalar reference
+// (JuliaMap); other precisions are always scalar.
 BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, double iso = 0.0,
                           Precision precision = Precision::kDouble, JuliaFieldStats* stats = nullptr,
-                          JuliaKernel kernel = JuliaKernel::kVector);
+                          JuliaKernel kernel = JuliaKernel::kVector, VectorIsa max_isa = VectorIsa::kAvx512);
 
 // Any quaternion map's field log|q_n| (quijibo/quaternion_map.h) as a BatchField on points p:
 // q = [s p, 0] with s = `point_scale`; iso 0. `map` is shared by the field.

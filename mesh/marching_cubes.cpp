@@ -192,6 +192,7 @@ std::vector<double> TileNodeValues(const BatchField& field, const MeshLattice& l
 struct PendingVertex {
   Vec3 a, b;
   double fa, fb;
+  int kept = 0;  // false position: the end the last step kept (+1 a, -1 b, 0 none yet)
 };
 
 // The triangles of the active cells by the case table into `out` (with each vertex's global edge
@@ -245,9 +246,13 @@ std::vector<PendingVertex> TileTriangles(const Geometry& geo, const std::array<i
   return pending;
 }
 
-// Bisection on all crossing edges of the tile at once; each vertex is its edge's last midpoint, or
-// with o.bisection_interpolate the point where the line through the last bracket's end values
-// crosses iso (the midpoint when an end value is not finite).
+// Bisection on all crossing edges of the tile at once, then o.secant_steps false-position steps
+// (Illinois variant: when a step keeps the same end as the step before, that end's value is moved
+// halfway to iso, so that a bracket on a curved field still shrinks from both sides); each vertex is
+// its edge's last evaluated point, or with o.bisection_interpolate or secant steps the point where
+// the line through the last bracket's end values crosses iso (the midpoint when an end value is not
+// finite). Every step costs one evaluation per open edge; false position needs no more state than
+// the bracket, so seam edges stay bit-identical between tiles.
 void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vector<PendingVertex>& pending,
                     Counters& counters, TilePiece& out) {
   const double iso = field.iso;
@@ -261,14 +266,23 @@ void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vecto
   std::vector<std::uint32_t> open;
   std::vector<Vec3> mid;
   std::vector<double> fm;
-  for (int step = 0; step < o.bisection_steps; ++step) {
+  // Where the line through the bracket's end values crosses iso (its midpoint when an end value is
+  // not finite or both are equal).
+  auto crossing = [iso](const PendingVertex& p) -> Vec3 {
+    double t = 0.5;
+    if (std::isfinite(p.fa) && std::isfinite(p.fb) && p.fa != p.fb) t = std::clamp((iso - p.fa) / (p.fb - p.fa), 0.0, 1.0);
+    return {p.a[0] + t * (p.b[0] - p.a[0]), p.a[1] + t * (p.b[1] - p.a[1]), p.a[2] + t * (p.b[2] - p.a[2])};
+  };
+  for (int step = 0; step < o.bisection_steps + o.secant_steps; ++step) {
+    const bool secant = step >= o.bisection_steps;
     open.clear();
     mid.clear();
     for (std::size_t v = 0; v < nv; ++v)
       if (!done[v]) {
         open.push_back(std::uint32_t(v));
         const PendingVertex& p = pending[v];
-        mid.push_back({0.5 * (p.a[0] + p.b[0]), 0.5 * (p.a[1] + p.b[1]), 0.5 * (p.a[2] + p.b[2])});
+        mid.push_back(secant ? crossing(p)
+                             : Vec3{0.5 * (p.a[0] + p.b[0]), 0.5 * (p.a[1] + p.b[1]), 0.5 * (p.a[2] + p.b[2])});
       }
     if (open.empty()) break;
     fm.resize(mid.size());
@@ -278,22 +292,29 @@ void BisectVertices(const BatchField& field, const MeshingOptions& o, std::vecto
       out.vertex_positions[open[q]] = mid[q];
       if (std::abs(fm[q] - iso) < o.bisection_tolerance) {
         done[open[q]] = 1;
-      } else if (Inside(fm[q], iso) == Inside(p.fa, iso)) {
+        continue;
+      }
+      const int keep = Inside(fm[q], iso) == Inside(p.fa, iso) ? -1 : +1;  // the new point replaces a: b is kept
+      if (keep < 0) {
         p.a = mid[q];
         p.fa = fm[q];
       } else {
         p.b = mid[q];
         p.fb = fm[q];
       }
+      if (!secant) continue;
+      if (keep == p.kept) {  // Illinois: the same end kept twice in a row
+        double& f = keep > 0 ? p.fa : p.fb;
+        if (std::isfinite(f)) f = iso + 0.5 * (f - iso);
+      }
+      p.kept = keep;
     }
   }
-  if (!o.bisection_interpolate) return;
+  if (!o.bisection_interpolate && o.secant_steps == 0) return;
   for (std::size_t v = 0; v < nv; ++v) {
     const PendingVertex& p = pending[v];
     if (done[v] || !std::isfinite(p.fa) || !std::isfinite(p.fb) || p.fa == p.fb) continue;
-    const double t = std::clamp((iso - p.fa) / (p.fb - p.fa), 0.0, 1.0);
-    out.vertex_positions[v] = {p.a[0] + t * (p.b[0] - p.a[0]), p.a[1] + t * (p.b[1] - p.a[1]),
-                               p.a[2] + t * (p.b[2] - p.a[2])};
+    out.vertex_positions[v] = crossing(p);
   }
 }
 
@@ -331,8 +352,13 @@ std::string MeshingOptions::Validate() const {
   }
   if (auto why = CheckRange("resolution", SettingType::kInteger, resolution, kResolutionRange); !why.empty())
     return why;
-  if (bisection_steps < (bisection_interpolate ? 0 : 1) || bisection_steps > 60)
-    return bisection_interpolate ? "bisection steps must be in [0, 60]" : "bisection steps must be in [1, 60]";
+  if (secant_steps < 0 || secant_steps > 8) return "secant steps must be in [0, 8]";
+  // The vertex is interpolated in its last bracket with bisection_interpolate or secant steps: the
+  // bisection steps may then be 0.
+  const bool interpolated = bisection_interpolate || secant_steps > 0;
+  if (bisection_steps < (interpolated ? 0 : 1) || bisection_steps > 60)
+    return interpolated ? "bisection steps must be in [0, 60]"
+                        : "bisection steps must be in [1, 60] (0 only with --bisection-interpolate or secant steps)";
   if (!(bisection_tolerance >= 0) || !std::isfinite(bisection_tolerance)) return "bisection tolerance must be finite and >= 0";
   if (!pow2(block_cells)) return "block cells must be a power of 2";
   if (!pow2(search_stride) || search_stride < block_cells) return "search stride must be a power of 2 >= block cells";

@@ -46,6 +46,12 @@ struct MeshingOptions {
   // end values crosses iso instead of at the bracket's midpoint (0 steps allowed: plain marching
   // cubes interpolation). Fewer steps for nearly the same vertices; docs/meshing.md "Bisection".
   bool bisection_interpolate = false;
+  // After the bisection steps, this many false-position steps (the field evaluated where the line
+  // through the bracket's end values crosses iso, that point replacing the end on its side;
+  // Illinois variant), then the vertex interpolated in the last bracket (as bisection_interpolate;
+  // the bisection steps may then be 0). In [0, 8]. Fewer evaluations than plain bisection for
+  // vertices as close to the surface; docs/meshing.md "Bisection".
+  int secant_steps = 0;
   bool sparse = true;                 // coarse-to-fine block search; false evaluates every node
   int tile_cells = 32;                // cells per tile side (the unit of parallel work and memory)
   int coarse_margin_cells = 2;        // safety margin of the sparse block search, in fine cells

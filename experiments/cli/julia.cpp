@@ -260,12 +260,33 @@ void AddPicture(CLI::App& app) {
   });
 }
 
+// bench mesh's kernel cases: "KERNEL" or "KERNEL:ISA" (the vector instruction set capped, for A/B
+// runs of one kernel on several instruction sets).
+struct KernelCase {
+  std::string label, kernel;
+  VectorIsa max_isa = VectorIsa::kAvx512;
+  bool capped = false;
+};
+
+KernelCase ParseKernelCase(const std::string& spec) {
+  KernelCase k;
+  const std::size_t colon = spec.find(':');
+  k.kernel = JuliaKernelName(ParseJuliaKernel(spec.substr(0, colon)));
+  k.label = k.kernel;
+  if (colon != std::string::npos) {
+    k.max_isa = ParseVectorIsa(spec.substr(colon + 1));
+    k.capped = true;
+    k.label += std::string(":") + VectorIsaName(k.max_isa);
+  }
+  return k;
+}
+
 // For each kernel, which of `count` seeded random points of the mesh stage's box are inside the set
 // {log|q_n| < iso} the stage meshes (its iterated map, translation and settings): the volume IoU
 // of the kernels' sets without meshing.
 std::vector<std::vector<char>> KernelSetsAtRandomPoints(const RationalMap& input_map,
                                                         const pipeline::MeshStageOptions& o,
-                                                        const std::vector<std::string>& kernels, std::size_t count,
+                                                        const std::vector<KernelCase>& kernels, std::size_t count,
                                                         std::uint64_t seed) {
   const RationalMap map = IterationMap(input_map, o.iteration_frame, o.detail);
   const JuliaOptions julia = o.TranslatedJuliaOfIterated(map);
@@ -279,9 +300,9 @@ std::vector<std::vector<char>> KernelSetsAtRandomPoints(const RationalMap& input
   for (Vec3& p : points)
     for (int a = 0; a < 3; ++a) p[a] = lo[a] + (hi[a] - lo[a]) * (double(rng() >> 11) * 0x1p-53);
   std::vector<std::vector<char>> inside;
-  for (const std::string& k : kernels) {
+  for (const KernelCase& k : kernels) {
     const mesh::BatchField field =
-        mesh::MakeJuliaField(map, julia, o.iso, Precision::kDouble, nullptr, ParseJuliaKernel(k));
+        mesh::MakeJuliaField(map, julia, o.iso, Precision::kDouble, nullptr, ParseJuliaKernel(k.kernel), k.max_isa);
     std::vector<double> v(count);
     const std::int64_t chunk = 4096, chunks = (std::int64_t(count) + chunk - 1) / chunk;
 #pragma omp parallel for schedule(dynamic)
@@ -309,7 +330,10 @@ void AddBenchMesh(CLI::App* bench) {
               "each iteration kernel");
   c->add_option("map", a->map, "map.json")->required();
   c->add_option("--resolutions", a->resolutions, "Comma-separated resolutions")->capture_default_str();
-  c->add_option("--kernel", a->kernels, "Comma-separated iteration kernels: scalar, vector")->capture_default_str();
+  c->add_option("--kernel", a->kernels,
+                "Comma-separated iteration kernels: scalar, vector, fused, float; KERNEL:ISA caps the vector "
+                "instruction set (sse2, avx2, avx512) for that case")
+      ->capture_default_str();
   c->add_option("--markdown", a->out, "Append the Markdown table to this file");
   // The mesh stage's settings that change the set or its cost (intricate sets: --detail,
   // --translate-potential, --iteration-frame), as `quijibo mesh` and `quijibo run` take them.
@@ -326,10 +350,10 @@ void AddBenchMesh(CLI::App* bench) {
     const RationalMap map = ReadMap(a->map);
     std::vector<int> res;
     for (double r : ParseNumbers(a->resolutions, "--resolutions")) res.push_back(int(r));
-    std::vector<std::string> kernels;
+    std::vector<KernelCase> kernels;
     {
       std::stringstream s(a->kernels);
-      for (std::string k; std::getline(s, k, ',');) kernels.push_back(JuliaKernelName(ParseJuliaKernel(k)));
+      for (std::string k; std::getline(s, k, ',');) kernels.push_back(ParseKernelCase(k));
       if (kernels.empty()) throw Error("--kernel: name at least one kernel");
     }
     double load[3] = {0, 0, 0};
@@ -346,12 +370,15 @@ void AddBenchMesh(CLI::App* bench) {
     json all = json::array();
     for (int r : res) {
       std::map<std::string, double> rate;
-      for (const std::string& kernel : kernels) {
+      for (const KernelCase& kc : kernels) {
+        const std::string& kernel = kc.label;
         const ChildResult child = ChildProcess([&]() -> std::string {
           try {
             pipeline::MeshStageOptions o = a->o;
             o.meshing.resolution = r;
-            o.kernel = kernel;
+            o.kernel = kc.kernel;
+            // The child's own environment: the kernels it builds take this instruction set.
+            if (kc.capped) ::setenv("QUIJIBO_VECTOR_ISA", VectorIsaName(kc.max_isa), 1);
             const pipeline::MeshStageResult m = pipeline::MeshJulia(map, o);
             const mesh::MeshingSummary& s = m.summary;
             const Vec4& t = m.julia.root_translation;
@@ -374,7 +401,9 @@ void AddBenchMesh(CLI::App* bench) {
         const double seconds = std::max(j["seconds"].get<double>(), 1e-9);
         const double evals = double(j["nodes"].get<std::int64_t>() + j["bisection"].get<std::int64_t>());
         j["resolution"] = r;
-        j["kernel"] = kernel;
+        j["kernel"] = kc.kernel;
+        j["case"] = kc.label;
+        j["vector_isa"] = kc.kernel == "scalar" ? "none" : VectorIsaName(std::min(BestVectorIsa(), kc.max_isa));
         j["peak_rss_mb"] = child.peak_rss_mb;
         j["cpu_seconds"] = child.cpu_seconds;
         j["evaluations_per_second"] = evals / seconds;
@@ -413,11 +442,11 @@ void AddBenchMesh(CLI::App* bench) {
           differ += inside[0][i] != inside[k][i];
         }
         const double iou = either ? double(both) / double(either) : 1.0;
-        agreement.push_back({{"kernel", kernels[k]}, {"against", kernels[0]}, {"points", a->compare_points},
+        agreement.push_back({{"kernel", kernels[k].label}, {"against", kernels[0].label}, {"points", a->compare_points},
                              {"inside", either}, {"differing", differ}, {"volume_iou", iou}});
         char line[256];
         std::snprintf(line, sizeof line, "\nVolume IoU of %s's set against %s's: %.6f (%lld of %d random points differ)\n",
-                      kernels[k].c_str(), kernels[0].c_str(), iou, (long long)differ, a->compare_points);
+                      kernels[k].label.c_str(), kernels[0].label.c_str(), iou, (long long)differ, a->compare_points);
         md += line;
         std::fprintf(stderr, "%s", line);
       }

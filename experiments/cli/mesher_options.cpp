@@ -11,6 +11,10 @@ void AddMesherOptions(CLI::App* c, mesh::MeshingOptions& o) {
   c->add_flag("--bisection-interpolate", o.bisection_interpolate,
               "After the bisection steps, interpolate linearly in the last bracket (fewer steps, nearly the same "
               "vertices; 0 steps: plain marching cubes)");
+  c->add_option("--secant-steps", o.secant_steps,
+                "After the bisection steps, false-position steps (the field evaluated where the bracket's line "
+                "crosses iso), then the vertex interpolated in the last bracket")
+      ->capture_default_str();
   c->add_option("--margin", o.coarse_margin_cells, "Safety margin of the sparse search, cells")->capture_default_str();
   c->add_option("--search-stride", o.search_stride, "Coarsest lattice of the sparse search, cells")
       ->capture_default_str();

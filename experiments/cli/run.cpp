@@ -6,6 +6,7 @@
 #include "experiments/cli/cli.h"
 #include "experiments/pipeline/report_html.h"
 #include "experiments/pipeline/run.h"
+#include "util/error.h"
 #include "util/progress.h"
 
 namespace quijibo::cli {

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include "quijibo/julia_batch.h"
 
 namespace quijibo {
 namespace {
@@ -196,6 +197,29 @@ TEST_F(JuliaCli, BenchMeshTakesTheMeshStageSettings) {
   EXPECT_GT(a["inside"].get<int>(), 0);
   EXPECT_GE(a["volume_iou"].get<double>(), 0.99);
   EXPECT_NE(RunQuijibo(common + "--compare-points -1").code, 0);
+}
+
+// `bench mesh --kernel KERNEL:ISA` caps the instruction set of one case (A/B of AVX2 and AVX-512 in
+// one run); the float kernel's set agrees with double's; --secant-steps reaches the mesher and is
+// validated.
+TEST_F(JuliaCli, BenchMeshInstructionSetCasesAndSecantSteps) {
+  const std::string common = "bench mesh " + Path("map.json") + " --resolutions 16 -n 3 ";
+  const CommandResult r = RunQuijibo(common + "--kernel vector:sse2,vector,float --secant-steps 1 --compare-points 3000");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out.substr(r.out.find("{\n")));
+  ASSERT_EQ(j["results"].size(), 3u);
+  EXPECT_EQ(j["results"][0]["case"], "vector:sse2");
+  EXPECT_EQ(j["results"][0]["kernel"], "vector");
+  EXPECT_EQ(j["results"][0]["vector_isa"], "sse2");
+  EXPECT_EQ(j["results"][1]["vector_isa"], VectorIsaName(BestVectorIsa()));
+  EXPECT_EQ(j["results"][2]["kernel"], "float");
+  // The same evaluations on every instruction set (the same field, to rounding).
+  EXPECT_EQ(j["results"][0]["vertices"], j["results"][1]["vertices"]);
+  ASSERT_EQ(j["set_agreement"].size(), 2u);
+  EXPECT_GE(j["set_agreement"][0]["volume_iou"].get<double>(), 0.999);
+  EXPECT_GE(j["set_agreement"][1]["volume_iou"].get<double>(), 0.99);
+  EXPECT_NE(RunQuijibo(common + "--kernel vector:avx3").code, 0);
+  EXPECT_NE(RunQuijibo(common + "--kernel vector --secant-steps 9").code, 0);
 }
 
 }  // namespace

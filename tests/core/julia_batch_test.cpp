@@ -1,6 +1,7 @@
 // The vectorized Julia kernel (quijibo/julia_batch.h) against the scalar reference
 // (JuliaMap<double>::Iterate): field values, versors, iteration counts, escape and non-finite
-// values under every option, on both instruction sets; a node's value is independent of the batch.
+// values under every option, on every instruction set the CPU has (SSE2, AVX2, AVX-512), for the
+// vector, fused and float kernels; a node's value is independent of the batch.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -22,6 +23,12 @@ namespace {
 // docs/meshing.md (kernel section). libmvec is within 4 ulp per call; differences grow with n as
 // the iteration amplifies them.
 constexpr double kRelativeTolerance = 1e-11;
+// The float kernel (float log, atan2, sin, cos per factor; julia_batch.h): values within this of the
+// scalar kernel's (relative as above), measured largest 2.4e-5 at n = 6 on these cases (docs/meshing.md);
+// a point whose escape or iteration count differs (its value within this of log_escape, or
+// log_capture) is allowed in at most kFloatFlipFraction of the points.
+constexpr double kFloatRelativeTolerance = 1e-3;
+constexpr double kFloatFlipFraction = 0.002;
 
 RationalMap BatchTestMap(std::uint64_t seed, int top, int bottom, bool zero_roots) {
   return testing::JuliaTestMap(seed, top, bottom, zero_roots);
@@ -70,43 +77,53 @@ std::vector<BatchCase> BatchCases() {
   };
 }
 
-// Parameters: the case, AVX2 allowed, the fused kernel (vector_math.h) instead of libmvec.
-class JuliaBatchMatchesScalar : public ::testing::TestWithParam<std::tuple<int, bool, bool>> {};
+const std::vector<JuliaKernel> kVectorKernels = {JuliaKernel::kVector, JuliaKernel::kFused, JuliaKernel::kFloat};
+
+// Parameters: the case, the instruction set (every one this CPU has), the kernel.
+class JuliaBatchMatchesScalar : public ::testing::TestWithParam<std::tuple<int, VectorIsa, JuliaKernel>> {};
 
 TEST_P(JuliaBatchMatchesScalar, ValuesVersorsIterationsAndEscape) {
-  const auto [index, avx2, fused] = GetParam();
+  const auto [index, isa, kernel] = GetParam();
   const BatchCase c = BatchCases()[std::size_t(index)];
   SCOPED_TRACE(c.name);
   const RationalMap map = BatchTestMap(7 + std::uint64_t(index), c.top, c.bottom, c.zero_roots);
   const JuliaMap<double> scalar(map, c.options);
-  const JuliaBatch batch(map, c.options, avx2, fused);
+  const JuliaBatch batch(map, c.options, kernel, isa);
+  ASSERT_EQ(batch.vector_isa(), isa);
+  const bool single = kernel == JuliaKernel::kFloat;
+  const double tolerance = single ? kFloatRelativeTolerance : kRelativeTolerance;
   std::vector<Vec3> p = BatchPoints(c.top > 100 ? 600 : 3000, 11 + std::uint64_t(index));
   p.push_back({0, 0, 0});  // the zero roots' own point
   std::vector<JuliaResult<double>> v(p.size());
   batch.At(p.data(), p.size(), v.data());
-  int escaped = 0, finite = 0;
+  int escaped = 0, finite = 0, flipped = 0;
   double worst = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {
     const JuliaResult<double> s = scalar.At(p[i]);
-    ASSERT_EQ(v[i].iterations, s.iterations) << i;
-    ASSERT_EQ(v[i].escaped, s.escaped) << i;
     ASSERT_EQ(std::isfinite(v[i].log_modulus), std::isfinite(s.log_modulus)) << i;
+    if (v[i].iterations != s.iterations || v[i].escaped != s.escaped) {
+      ASSERT_TRUE(single) << i << ": iterations " << v[i].iterations << " vs " << s.iterations;
+      ++flipped;  // float: an iterate on the other side of the escape or capture radius
+      continue;
+    }
     escaped += s.escaped;
     if (!std::isfinite(s.log_modulus)) continue;
     ++finite;
     const double scale = std::max(1.0, std::abs(s.log_modulus));
     worst = std::max(worst, std::abs(v[i].log_modulus - s.log_modulus) / scale);
-    ASSERT_NEAR(v[i].log_modulus, s.log_modulus, kRelativeTolerance * scale) << i;
+    ASSERT_NEAR(v[i].log_modulus, s.log_modulus, tolerance * scale) << i;
     if (!s.escaped) {  // escaped versors are those of a number e^2000-times larger: compare the value only
-      EXPECT_NEAR(v[i].versor.w, s.versor.w, 1e-6) << i;
-      EXPECT_NEAR(v[i].versor.x, s.versor.x, 1e-6) << i;
-      EXPECT_NEAR(v[i].versor.y, s.versor.y, 1e-6) << i;
-      EXPECT_NEAR(v[i].versor.z, s.versor.z, 1e-6) << i;
+      const double vt = single ? 1e-2 : 1e-6;
+      EXPECT_NEAR(v[i].versor.w, s.versor.w, vt) << i;
+      EXPECT_NEAR(v[i].versor.x, s.versor.x, vt) << i;
+      EXPECT_NEAR(v[i].versor.y, s.versor.y, vt) << i;
+      EXPECT_NEAR(v[i].versor.z, s.versor.z, vt) << i;
     }
   }
   RecordProperty("max_relative_difference", std::to_string(worst));
-  std::printf("%s %s%s: max |L_vector - L_scalar| / max(1, |L|) = %.3g over %d finite values, %d escaped\n", c.name,
-              batch.isa(), fused ? " fused" : "", worst, finite, escaped);
+  std::printf("%s %s %s: max |L_vector - L_scalar| / max(1, |L|) = %.3g over %d finite values, %d escaped, %d flipped\n",
+              c.name, batch.isa(), JuliaKernelName(kernel), worst, finite, escaped, flipped);
+  EXPECT_LE(flipped, kFloatFlipFraction * double(p.size()));
   EXPECT_GT(finite, int(p.size()) / 2);
   if (c.options.iterations > 1) {
     EXPECT_GT(escaped, 0);
@@ -114,8 +131,23 @@ TEST_P(JuliaBatchMatchesScalar, ValuesVersorsIterationsAndEscape) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, JuliaBatchMatchesScalar,
-                         ::testing::Combine(::testing::Range(0, int(BatchCases().size())), ::testing::Bool(),
-                                            ::testing::Bool()));
+                         ::testing::Combine(::testing::Range(0, int(BatchCases().size())),
+                                            ::testing::ValuesIn(SupportedVectorIsas()),
+                                            ::testing::ValuesIn(kVectorKernels)));
+
+// The instruction set: the CPU's best unless capped (by the constructor or QUIJIBO_VECTOR_ISA).
+TEST(JuliaBatch, InstructionSets) {
+  const RationalMap map = BatchTestMap(3, 4, 3, false);
+  const std::vector<VectorIsa> all = SupportedVectorIsas();
+  ASSERT_FALSE(all.empty());
+  EXPECT_EQ(all.front(), VectorIsa::kSse2);
+  EXPECT_EQ(JuliaBatch(map, JuliaOptions{}).vector_isa(), all.back());
+  EXPECT_EQ(JuliaBatch(map, JuliaOptions{}, JuliaKernel::kVector, VectorIsa::kSse2).vector_isa(), VectorIsa::kSse2);
+  EXPECT_EQ(ParseVectorIsa("avx512"), VectorIsa::kAvx512);
+  EXPECT_STREQ(VectorIsaName(VectorIsa::kAvx2), "avx2");
+  EXPECT_THROW(ParseVectorIsa("avx"), Error);
+  EXPECT_THROW(JuliaBatch(map, JuliaOptions{}, JuliaKernel::kScalar), Error);
+}
 
 // Samples on a root and NaN samples: non-finite exactly where the scalar kernel is, and NaN stays
 // NaN (counted by the field, not hidden).
@@ -124,9 +156,9 @@ TEST(JuliaBatch, NonFiniteLikeTheScalarKernel) {
   JuliaOptions o;
   o.iterations = 1;
   const JuliaMap<double> scalar(map, o);
-  for (bool fused : {false, true}) {
-  SCOPED_TRACE(fused ? "fused" : "vector");
-  const JuliaBatch batch(map, o, true, fused);
+  for (JuliaKernel kernel : kVectorKernels) {
+  SCOPED_TRACE(JuliaKernelName(kernel));
+  const JuliaBatch batch(map, o, kernel);
   std::vector<Quaternion<double>> q0;
   for (const auto& f : scalar.Factors()) q0.push_back(f.root);  // log|q - r| = -inf
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -158,9 +190,10 @@ TEST(JuliaBatch, ValueIndependentOfTheBatch) {
   const RationalMap map = BatchTestMap(9, 12, 9, true);
   JuliaOptions o;
   o.iterations = 4;
-  for (bool fused : {false, true}) {
-  SCOPED_TRACE(fused ? "fused" : "vector");
-  const JuliaBatch batch(map, o, true, fused);
+  for (VectorIsa isa : SupportedVectorIsas())
+  for (JuliaKernel kernel : kVectorKernels) {
+  SCOPED_TRACE(std::string(JuliaKernelName(kernel)) + " " + VectorIsaName(isa));
+  const JuliaBatch batch(map, o, kernel, isa);
   const std::vector<Vec3> p = BatchPoints(203, 21);
   std::vector<JuliaResult<double>> all(p.size());
   batch.At(p.data(), p.size(), all.data());
@@ -187,6 +220,8 @@ TEST(JuliaBatch, KernelNames) {
   EXPECT_EQ(ParseJuliaKernel("vector"), JuliaKernel::kVector);
   EXPECT_EQ(ParseJuliaKernel("scalar"), JuliaKernel::kScalar);
   EXPECT_EQ(ParseJuliaKernel("fused"), JuliaKernel::kFused);
+  EXPECT_EQ(ParseJuliaKernel("float"), JuliaKernel::kFloat);
+  EXPECT_STREQ(JuliaKernelName(JuliaKernel::kFloat), "float");
   EXPECT_STREQ(JuliaKernelName(JuliaKernel::kFused), "fused");
   EXPECT_STREQ(JuliaKernelName(JuliaKernel::kVector), "vector");
   EXPECT_THROW(ParseJuliaKernel("simd"), Error);

@@ -117,6 +117,50 @@ TEST(MarchingCubes, BisectionInterpolationMovesOnlyVertices) {
   EXPECT_THROW(MeshField(sphere, o), Error);  // 0 steps only with interpolation
 }
 
+// --secant-steps (false position after bisection, then interpolation): the same triangles as plain
+// bisection, fewer evaluations than 6 plain steps, and on a curved field (the log of the distance,
+// like log|q_n|) every vertex at least as close to the 10-step plain bisection's as 6 plain steps'
+// vertices are (these are within h/64 + h/1024 of it); with 0 bisection steps too (Illinois).
+// Tile size does not change the vertices (seam edges get the same brackets from both tiles).
+TEST(MarchingCubes, FalsePositionStepsAreAsCloseWithFewerEvaluations) {
+  const Vec3 c{0.02, -0.01, 0.03};
+  const BatchField field = Lambda([c](const Vec3& p) { return std::log(Norm({p[0] - c[0], p[1] - c[1], p[2] - c[2]}) / 0.8); });
+  MeshingOptions o;
+  o.resolution = 32;
+  o.bisection_steps = 10;
+  MeshingSummary s10;
+  const TriangleMesh reference = MeshField(field, o, &s10);
+  auto worst = [&](const TriangleMesh& m) {
+    EXPECT_EQ(m.triangles, reference.triangles);
+    double w = 0;
+    for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+      const Vec3 &a = m.vertices[v], &b = reference.vertices[v];
+      w = std::max(w, Norm({a[0] - b[0], a[1] - b[1], a[2] - b[2]}));
+    }
+    return w / s10.spacing;  // cells
+  };
+  o.bisection_steps = 6;
+  MeshingSummary s6;
+  const double plain = worst(MeshField(field, o, &s6));
+  EXPECT_LE(plain, 1.0 / 64 + 1.0 / 1024 + 1e-9);  // the last midpoint: within h / 2^steps of the root
+  for (const auto& [bisection, secant] : std::vector<std::pair<int, int>>{{3, 1}, {2, 2}, {0, 3}}) {
+    SCOPED_TRACE(std::to_string(bisection) + " + " + std::to_string(secant));
+    o.bisection_steps = bisection;
+    o.secant_steps = secant;
+    MeshingSummary s;
+    const TriangleMesh m = MeshField(field, o, &s);
+    EXPECT_LT(s.bisection_evaluations, s6.bisection_evaluations);
+    EXPECT_LE(worst(m), plain);
+    o.tile_cells = 8;
+    EXPECT_EQ(MeshField(field, o).vertices, m.vertices);
+    o.tile_cells = MeshingOptions{}.tile_cells;
+  }
+  o.secant_steps = 9;
+  EXPECT_THROW(MeshField(field, o), Error);
+  o.secant_steps = -1;
+  EXPECT_THROW(MeshField(field, o), Error);
+}
+
 TEST(MarchingCubes, GyroidIsClosedAndManifold) {
   MeshingOptions o;
   o.resolution = 64;

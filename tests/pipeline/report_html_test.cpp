@@ -14,6 +14,7 @@
 #include "quijibo_command.h"
 #include "mesh/mesh_fixtures.h"
 #include "util/io.h"
+#include "util/error.h"
 
 namespace quijibo::pipeline {
 namespace {
