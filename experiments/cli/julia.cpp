@@ -95,7 +95,7 @@ struct JuliaArgs {
   }
 };
 
-void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
+void AddMesh(CLI::App& app, const pipeline::Mesher& mesher, const pipeline::StreamMesher& stream_mesher) {
   struct Args {
     std::string map, box, summary;
     pipeline::MeshFiles files;
@@ -123,13 +123,17 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
                                  "normalized cube, its centre +-fractal_radius/2)");
   AddMesherOptions(c, o.meshing);
   c->add_flag("--ply-double", o.ply_double, "PLY coordinates as double (default float)");
+  c->add_flag("--stream", o.stream,
+              "Write the PLY (and the .vdb's field grid) as the tiles finish: memory bounded by the front of tiles, "
+              "not by the mesh; the same bytes as without it. Face indices int below 2^31 vertices, uint below 2^32, "
+              "uint64 beyond; no --obj, and the .vdb holds only --vdb-grids field (docs/meshing.md)");
   c->add_flag("--allow-empty", a->allow_empty,
               "A surface that does not cross the box is a result, not an error: write the summary (0 "
               "triangles) and no mesh files");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
   a->j.add(c, {"resolution", "iterations", "escape", "capture", "iso", "iteration_frame", "detail", "translate_potential",
                "frame", "precision", "kernel"});
-  c->callback([a, mesher] {
+  c->callback([a, mesher, stream_mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
     // The output names first; their folders are created when the mesh is ready to be written.
     pipeline::MeshFiles names = a->files;
@@ -144,7 +148,11 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
       o.rotation = ParseNumbers(a->j.rotate, "--rotate");
       if (o.rotation.size() != 4) throw Error("--rotate: expected ax,ay,az,degrees");
     }
-    const pipeline::MeshStageResult r = pipeline::MeshJulia(map, o, mesher);
+    if (o.stream)  // the scratch files are made beside the outputs while meshing
+      for (const std::string& p : {a->files.out, a->files.vdb})
+        if (!p.empty()) CreateParentFolder(p);
+    const pipeline::MeshStageResult r =
+        o.stream ? pipeline::MeshJuliaStreamed(map, o, a->files, stream_mesher) : pipeline::MeshJulia(map, o, mesher);
     if (!r.writer) return;
     if (r.empty() && !a->allow_empty)
       throw Error(a->map + ": the surface log|q_n| = " + std::to_string(o.iso) +
@@ -436,10 +444,12 @@ void AddBenchMesh(CLI::App* bench) {
 
 }  // namespace
 
-void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher) { AddMesh(app, mesher); }
+void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher, const pipeline::StreamMesher& stream_mesher) {
+  AddMesh(app, mesher, stream_mesher);
+}
 
 void AddJuliaCommands(CLI::App& app, CLI::App& bench) {
-  AddMesh(app, pipeline::LocalMesher);
+  AddMesh(app, pipeline::LocalMesher, pipeline::LocalStreamMesher);
   AddPicture(app);
   AddBenchMesh(&bench);
 }

@@ -9,6 +9,7 @@
 #include "optim/small_run.h"
 #include "quijibo/loglinear_energy.h"
 #include "quijibo/target.h"
+#include "util/error.h"
 
 namespace quijibo::optim {
 namespace {
