@@ -17,7 +17,6 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <unordered_map>
 #include <unordered_set>
 
 #include "util/error.h"
@@ -105,19 +104,19 @@ class Scratch {
   std::uint64_t size_ = 0;
 };
 
-// Union-find over 64-bit keys (edge ids), for the front only.
-struct KeyUnionFind {
-  std::unordered_map<std::int64_t, std::size_t> slot;
-  std::vector<std::size_t> parent;
+// Union-find over sorted 64-bit keys (edge ids) of the front: 16 bytes per key, no hashing.
+struct SortedUnionFind {
   std::vector<std::int64_t> key;
-  std::size_t add(std::int64_t k) {
-    auto [it, fresh] = slot.try_emplace(k, parent.size());
-    if (fresh) {
-      parent.push_back(parent.size());
-      key.push_back(k);
-    }
-    return it->second;
+  std::vector<std::size_t> parent;
+  explicit SortedUnionFind(std::vector<std::int64_t> keys) : key(std::move(keys)) {
+    std::sort(key.begin(), key.end());
+    key.erase(std::unique(key.begin(), key.end()), key.end());
+    key.shrink_to_fit();
+    parent.resize(key.size());
+    for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = i;
   }
+  std::size_t at(std::int64_t k) const { return std::size_t(std::lower_bound(key.begin(), key.end(), k) - key.begin()); }
+  bool has(std::int64_t k) const { return std::binary_search(key.begin(), key.end(), k); }
   std::size_t find(std::size_t v) {
     while (parent[v] != v) v = parent[v] = parent[parent[v]];
     return v;
@@ -128,10 +127,10 @@ struct KeyUnionFind {
   }
 };
 
-struct PairHash {
-  std::size_t operator()(const std::pair<std::int64_t, std::int64_t>& p) const {
-    return std::hash<std::int64_t>()(p.first * 0x9E3779B97F4A7C15ll ^ p.second);
-  }
+// A mesh edge (the edge ids of its two vertices, low first) and the triangles counted on it.
+struct EdgeCount {
+  std::int64_t lo, hi;
+  int count;
 };
 
 }  // namespace streaming
@@ -166,8 +165,8 @@ struct MeshStreamWriter::State {
   std::int64_t numbered_below = 0;         // planes z < this are numbered
   std::uint64_t vertices = 0, triangles = 0;
   std::unordered_set<std::int64_t> removed;  // edges of the vertices of specks
-  std::unordered_map<std::int64_t, std::int64_t> carry;  // live vertex -> its component's label
-  std::unordered_map<std::pair<std::int64_t, std::int64_t>, int, PairHash> pairs;  // mesh edge -> triangles
+  std::vector<std::pair<std::int64_t, std::int64_t>> carry;  // (live vertex, its component's label)
+  std::vector<EdgeCount> pairs;  // mesh edges that tiles still to be written may touch
   std::int64_t specks = 0, components = 0, open = 0, open_inside = 0, non_manifold = 0;
   std::int64_t nodes = 0, bisection = 0, non_finite = 0, blocks_active = 0;
   MeshStreamReport report;
@@ -211,22 +210,25 @@ struct MeshStreamWriter::State {
   // One-node specks whose lowest vertex lies on a plane in [lo, hi): every cell around their node is
   // in the front then, and every triangle touching them (RemoveNodeSpecks' test on the front).
   void decide_specks(std::int64_t lo, std::int64_t hi) {
-    KeyUnionFind uf;
+    std::vector<std::int64_t> keys;
     for (const auto& h : front)
-      for (const auto& t : h.triangles) {
-        if (removed.count(h.edges[std::size_t(t[0])])) continue;
-        const std::size_t a = uf.add(h.edges[std::size_t(t[0])]);
-        uf.unite(a, uf.add(h.edges[std::size_t(t[1])]));
-        uf.unite(a, uf.add(h.edges[std::size_t(t[2])]));
-      }
+      for (const auto& t : h.triangles)
+        if (!removed.count(h.edges[std::size_t(t[0])]))
+          for (int c = 0; c < 3; ++c) keys.push_back(h.edges[std::size_t(t[std::size_t(c)])]);
+    SortedUnionFind uf(std::move(keys));
     const std::size_t n = uf.parent.size();
     std::vector<int> verts(n, 0), tris(n, 0);
+    for (const auto& h : front)
+      for (const auto& t : h.triangles)
+        if (!removed.count(h.edges[std::size_t(t[0])])) {
+          const std::size_t a = uf.at(h.edges[std::size_t(t[0])]);
+          uf.unite(a, uf.at(h.edges[std::size_t(t[1])]));
+          uf.unite(a, uf.at(h.edges[std::size_t(t[2])]));
+        }
     for (std::size_t v = 0; v < n; ++v) ++verts[uf.find(v)];
     for (const auto& h : front)
-      for (const auto& t : h.triangles) {
-        auto it = uf.slot.find(h.edges[std::size_t(t[0])]);
-        if (it != uf.slot.end()) ++tris[uf.find(it->second)];
-      }
+      for (const auto& t : h.triangles)
+        if (!removed.count(h.edges[std::size_t(t[0])])) ++tris[uf.find(uf.at(h.edges[std::size_t(t[0])]))];
     const std::int64_t step[3] = {1, nx, nxy};
     std::vector<std::pair<std::size_t, std::int64_t>> ends;  // (component, edge end node)
     for (std::size_t v = 0; v < n; ++v) {
@@ -286,10 +288,21 @@ struct MeshStreamWriter::State {
       h.global[refs[i].v] = std::int64_t(vertices - 1);
     }
     numbered_below = below;
-    // Triangles in tile order, of the pieces whose planes are all numbered.
-    KeyUnionFind uf;
-    for (const auto& [v, label] : carry) uf.unite(uf.add(v), uf.add(label));
-    while (!front.empty() && front.front().top_plane < below) {
+    // Triangles in tile order, of the pieces whose planes are all numbered; a union-find over their
+    // vertices and the labels carried from the last step.
+    std::size_t ready = 0;
+    while (ready < front.size() && front[ready].top_plane < below) ++ready;
+    std::vector<std::int64_t> keys;
+    for (const auto& [v, label] : carry) keys.push_back(v), keys.push_back(label);
+    for (std::size_t i = 0; i < ready; ++i)
+      for (const auto& t : front[i].triangles)
+        if (!removed.count(front[i].edges[std::size_t(t[0])]))
+          for (int c = 0; c < 3; ++c) keys.push_back(front[i].edges[std::size_t(t[std::size_t(c)])]);
+    SortedUnionFind uf(std::move(keys));
+    for (const auto& [v, label] : carry) uf.unite(uf.at(v), uf.at(label));
+    std::vector<EdgeCount> counts;
+    counts.swap(pairs);
+    for (; ready > 0; --ready) {
       HeldPiece& h = front.front();
       for (const auto& t : h.triangles) {
         if (removed.count(h.edges[std::size_t(t[0])])) continue;
@@ -301,45 +314,49 @@ struct MeshStreamWriter::State {
           face_file.put(std::uint64_t(g));
         }
         ++triangles;
-        const std::size_t a = uf.add(e[0]);
-        uf.unite(a, uf.add(e[1]));
-        uf.unite(a, uf.add(e[2]));
+        const std::size_t a = uf.at(e[0]);
+        uf.unite(a, uf.at(e[1]));
+        uf.unite(a, uf.at(e[2]));
         for (int c = 0; c < 3; ++c) {
           const std::int64_t u = e[std::size_t(c)], w = e[std::size_t((c + 1) % 3)];
-          ++pairs[{std::min(u, w), std::max(u, w)}];
+          counts.push_back({std::min(u, w), std::max(u, w), 1});
         }
       }
       front.pop_front();
     }
-    // Components: those with no vertex left in the front are complete.
-    std::unordered_set<std::int64_t> live;
+    // Components: those with no vertex left in the front are complete; the others carry a label.
+    std::vector<std::int64_t> live;
     for (const auto& h : front)
       for (std::int64_t e : h.edges)
-        if (uf.slot.count(e)) live.insert(e);
+        if (uf.has(e)) live.push_back(e);
+    std::sort(live.begin(), live.end());
+    live.erase(std::unique(live.begin(), live.end()), live.end());
     std::vector<char> root_live(uf.parent.size(), 0);
-    for (std::int64_t e : live) root_live[uf.find(uf.slot[e])] = 1;
+    for (std::int64_t e : live) root_live[uf.find(uf.at(e))] = 1;
     for (std::size_t v = 0; v < uf.parent.size(); ++v)
       if (uf.find(v) == v && !root_live[v]) ++components;
     carry.clear();
-    for (std::int64_t e : live) carry[e] = uf.key[uf.find(uf.slot[e])];
+    for (std::int64_t e : live) carry.push_back({e, uf.key[uf.find(uf.at(e))]});
     // Mesh edges with a vertex below every tile still to be written can get no more triangles.
-    const std::int64_t floor = !front.empty()                   ? front.front().bottom_plane
-                               : next < plan.tile_ids.size()    ? layer_of(next) * plan.options.tile_cells
-                                                                : std::numeric_limits<std::int64_t>::max();
-    for (auto it = pairs.begin(); it != pairs.end();) {
-      if (std::min(plane(it->first.first), plane(it->first.second)) < floor) {
-        settle(it->first, it->second);
-        it = pairs.erase(it);
-      } else {
-        ++it;
-      }
+    const std::int64_t floor = !front.empty()                ? front.front().bottom_plane
+                               : next < plan.tile_ids.size() ? layer_of(next) * plan.options.tile_cells
+                                                             : std::numeric_limits<std::int64_t>::max();
+    std::sort(counts.begin(), counts.end(),
+              [](const EdgeCount& x, const EdgeCount& y) { return x.lo < y.lo || (x.lo == y.lo && x.hi < y.hi); });
+    for (std::size_t i = 0; i < counts.size();) {
+      EdgeCount sum = counts[i];
+      std::size_t j = i + 1;
+      for (; j < counts.size() && counts[j].lo == sum.lo && counts[j].hi == sum.hi; ++j) sum.count += counts[j].count;
+      if (std::min(plane(sum.lo), plane(sum.hi)) < floor) settle(sum.lo, sum.hi, sum.count);
+      else pairs.push_back(sum);
+      i = j;
     }
     for (auto it = removed.begin(); it != removed.end();)
       it = plane(*it) < floor ? removed.erase(it) : std::next(it);
   }
 
   // As AnalyzeLatticeMesh: an edge used once is open, inside unless both ends lie on one box face.
-  void settle(const std::pair<std::int64_t, std::int64_t>& e, int count) {
+  void settle(std::int64_t lo, std::int64_t hi, int count) {
     if (count > 2) ++non_manifold;
     if (count != 1) return;
     ++open;
@@ -354,7 +371,7 @@ struct MeshStreamWriter::State {
       }
       return bits;
     };
-    if (!(faces_of(e.first) & faces_of(e.second))) ++open_inside;
+    if (!(faces_of(lo) & faces_of(hi))) ++open_inside;
   }
 };
 
@@ -393,7 +410,7 @@ MeshStreamReport MeshStreamWriter::Finish(MeshingSummary* summary) {
   if (s.next != s.plan.tile_ids.size())
     throw Error("meshing: stream: " + std::to_string(s.plan.tile_ids.size() - s.next) + " tiles missing at the end");
   s.flush(std::numeric_limits<std::int64_t>::max());
-  for (const auto& [e, count] : s.pairs) s.settle(e, count);
+  for (const EdgeCount& e : s.pairs) s.settle(e.lo, e.hi, e.count);
   s.pairs.clear();
   s.finished = true;
   MeshStreamReport& r = s.report;
