@@ -1,5 +1,7 @@
 #include "mesh/vdb.h"
 
+#include <unistd.h>
+
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/LevelSetUtil.h>
@@ -14,8 +16,6 @@
 
 #include "util/error.h"
 #include "util/io.h"
-
-#include <unistd.h>
 
 namespace quijibo::mesh {
 
