@@ -123,16 +123,12 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher, const pipeline::Stre
                                  "normalized cube, its centre +-fractal_radius/2)");
   AddMesherOptions(c, o.meshing);
   c->add_flag("--ply-double", o.ply_double, "PLY coordinates as double (default float)");
-  c->add_flag("--stream", o.stream,
-              "Write the PLY (and the .vdb's field grid) as the tiles finish: memory bounded by the front of tiles, "
-              "not by the mesh; the same bytes as without it. Face indices int below 2^31 vertices, uint below 2^32, "
-              "uint64 beyond; no --obj, and the .vdb holds only --vdb-grids field (docs/meshing.md)");
   c->add_flag("--allow-empty", a->allow_empty,
               "A surface that does not cross the box is a result, not an error: write the summary (0 "
               "triangles) and no mesh files");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
   a->j.add(c, {"resolution", "iterations", "escape", "capture", "iso", "iteration_frame", "detail", "translate_potential",
-               "frame", "precision", "kernel"});
+               "frame", "precision", "kernel", "stream"});
   c->callback([a, mesher, stream_mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
     // The output names first; their folders are created when the mesh is ready to be written.

@@ -2,7 +2,8 @@
 // ranks (Allgatherv, so every rank holds the same tile plan); then rank 0 hands out batches of tiles
 // on demand over the work queue (tiles differ wildly in surface), meshes batches itself on a second
 // thread, receives the pieces (vertices keyed by global edge id) as they finish, welds them in tile
-// order and writes (or, with --stream, streams them to the PLY as they arrive: MeshStreamWriter). The result does not depend on which rank meshed which tile: it is the
+// order and writes (or, with --stream, streams them to the PLY as they arrive: MeshStreamWriter).
+// The result does not depend on which rank meshed which tile: it is the
 // single-process mesh, bit for bit.
 #include <omp.h>
 

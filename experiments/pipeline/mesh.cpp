@@ -113,6 +113,15 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
                   [](auto& o) -> std::string& { return o.frame; }, {"user", "fractal"})
           .Boolean("vdb", "", "Also write julia.vdb", [](auto& o) -> bool& { return o.vdb; })
           .Boolean("obj", "", "Also write julia.obj", [](auto& o) -> bool& { return o.obj; })
+          .Boolean("stream", "--stream",
+                   "Write the PLY (and the .vdb's field grid) as the tiles finish: memory bounded by the front of "
+                   "tiles, not by the mesh; the same bytes as without it. Face indices int below 2^31 vertices, uint "
+                   "below 2^32, uint64 beyond; no OBJ, and the .vdb holds only the grid field (docs/meshing.md)",
+                   [](auto& o) -> bool& { return o.stream; })
+          .Doc("write julia.ply as the mesher's tiles finish, memory bounded by the front of tiles rather than by "
+               "the mesh; the file is the same, byte for byte; needs `vdb` and `obj` false (the .vdb's grids and the "
+               "OBJ are made from the whole mesh) and leaves out the summary's `detail` ([meshing.md](meshing.md) "
+               "\"Streaming to disk\")")
           .Choice(
               "precision", "--precision", "Iteration precision: float, double, long-double or float128",
               [](auto& o) -> std::string& { return o.precision; }, kPrecisionNames)
@@ -171,6 +180,8 @@ MeshStageOptions MeshStageOptions::FromJson(const JsonReader& r, const std::stri
 json MeshStageOptions::ToJson() const {
   json j;
   Settings().Write(*this, j);
+  // Off is left out, so that the stage caches of runs made before the key existed stay valid.
+  if (!stream) j.erase("stream");
   return j;
 }
 

@@ -59,9 +59,8 @@ struct MeshStageOptions {
   std::vector<std::string> vdb_grids{"surface", "density"};  // of the .vdb: surface, density, field
   double vdb_band = 3.0;                                     // half-width of the level set's narrow band, voxels
   bool ply_double = false;                                   // PLY coordinates as double
-  // `quijibo mesh --stream` only: write the PLY (and the .vdb's field grid) as the tiles finish, with
-  // memory bounded by the front of tiles, not the mesh (MeshJuliaStreamed; docs/meshing.md "Streaming
-  // to disk"). Not a key of the run's mesh stage: the stages after it use the mesh in memory.
+  // Write the PLY (and the .vdb's field grid) as the tiles finish, with memory bounded by the front of
+  // tiles, not the mesh (MeshJuliaStreamed; docs/meshing.md "Streaming to disk").
   bool stream = false;
   // `quijibo run` only.
   bool enabled = true;
