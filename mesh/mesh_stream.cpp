@@ -375,6 +375,12 @@ struct MeshStreamWriter::State {
   }
 };
 
+std::string PlyIndexType(std::uint64_t vertices, int index_bits) {
+  if (index_bits == 64 || vertices > (std::uint64_t(1) << 32)) return "uint64";
+  if (vertices > (std::uint64_t(1) << 31)) return "uint";
+  return "int";
+}
+
 MeshStreamWriter::MeshStreamWriter(const TilePlan& plan, MeshStreamOptions options) {
   if (auto why = options.Validate(); !why.empty()) throw Error(why);
   s_ = std::make_unique<State>(plan, std::move(options));
@@ -415,9 +421,7 @@ MeshStreamReport MeshStreamWriter::Finish(MeshingSummary* summary) {
   s.finished = true;
   MeshStreamReport& r = s.report;
   r.non_manifold_edges = s.non_manifold;
-  r.index_type = s.o.index_bits == 64 || s.vertices >= (std::uint64_t(1) << 32) ? "uint64"
-                 : s.vertices >= (std::uint64_t(1) << 31)                       ? "uint"
-                                                                                : "int";
+  r.index_type = PlyIndexType(s.vertices, s.o.index_bits);
   if (summary) {
     MeshingSummary& m = *summary;
     m.nodes_evaluated = s.plan.search_evaluations + s.nodes;

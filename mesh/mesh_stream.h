@@ -33,8 +33,8 @@ struct MeshStreamOptions {
   std::function<Vec3(const Vec3&)> transform;
   // Given every piece in tile order (its narrow band, for a .vdb); empty: none. May throw.
   std::function<void(const TilePiece&)> band;
-  // Face index type: 0 chooses by the vertex count: int (as WritePly) below 2^31 vertices, uint below
-  // 2^32, uint64 beyond. 64 forces uint64 (tests of the 64-bit path on a small mesh).
+  // Face index type: 0 chooses by the vertex count (PlyIndexType). 64 forces uint64 (tests of the
+  // 64-bit path on a small mesh).
   int index_bits = 0;
   std::string Validate() const;  // empty when valid
 };
@@ -49,6 +49,10 @@ struct MeshStreamReport {
   std::int64_t flushes = 0;              // times vertices were numbered and written
   std::int64_t band_samples = 0;         // narrow-band samples of the pieces (as FieldBand::nodes.size())
 };
+
+// The PLY face index type for a mesh of `vertices` vertices: "int" (as WritePly) up to 2^31, "uint"
+// up to 2^32 (the largest index is vertices - 1), "uint64" beyond; index_bits 64 forces "uint64".
+std::string PlyIndexType(std::uint64_t vertices, int index_bits = 0);
 
 // Receives the pieces of a TilePlan's tiles (any order, each once) and streams the mesh to the PLY.
 // The destructor removes everything when Finish did not succeed. Not thread-safe: one Add at a time.

@@ -115,8 +115,8 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
           .Boolean("obj", "", "Also write julia.obj", [](auto& o) -> bool& { return o.obj; })
           .Boolean("stream", "--stream",
                    "Write the PLY (and the .vdb's field grid) as the tiles finish: memory bounded by the front of "
-                   "tiles, not by the mesh; the same bytes as without it. Face indices int below 2^31 vertices, uint "
-                   "below 2^32, uint64 beyond; no OBJ, and the .vdb holds only the grid field (docs/meshing.md)",
+                   "tiles, not by the mesh; the same bytes as without it. Face indices int up to 2^31 vertices, uint "
+                   "up to 2^32, uint64 beyond; no OBJ, and the .vdb holds only the grid field (docs/meshing.md)",
                    [](auto& o) -> bool& { return o.stream; })
           .Doc("write julia.ply as the mesher's tiles finish, memory bounded by the front of tiles rather than by "
                "the mesh; the file is the same, byte for byte; needs `vdb` and `obj` false (the .vdb's grids and the "

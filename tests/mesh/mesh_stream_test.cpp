@@ -180,6 +180,17 @@ print(nv, nf, int(f['i'].astype(np.uint64).sum()), '%.6f' % float(v.astype(np.fl
   EXPECT_NEAR(psum, vsum, 1e-3 + 1e-9 * std::abs(vsum));
 }
 
+// The largest index is vertices - 1: int holds it up to 2^31 vertices, uint up to 2^32.
+TEST(MeshStream, IndexTypeByVertexCount) {
+  const std::uint64_t two31 = std::uint64_t(1) << 31, two32 = std::uint64_t(1) << 32;
+  EXPECT_EQ(PlyIndexType(3), "int");
+  EXPECT_EQ(PlyIndexType(two31), "int");
+  EXPECT_EQ(PlyIndexType(two31 + 1), "uint");
+  EXPECT_EQ(PlyIndexType(two32), "uint");
+  EXPECT_EQ(PlyIndexType(two32 + 1), "uint64");
+  EXPECT_EQ(PlyIndexType(3, 64), "uint64");
+}
+
 TEST(MeshStream, FailureLeavesNoFile) {
   TempDir dir;
   MeshingOptions o;
