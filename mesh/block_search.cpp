@@ -60,17 +60,27 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
   std::vector<double> known_values;
   for (;;) {
     const BlockGrid g = MakeBlocks(l, stride);
-    // Corner nodes of the candidates.
-    std::vector<std::int64_t> keys;
-    keys.reserve(candidates.size() * 8);
+    // Corner nodes of the candidates, sorted and unique: marked on a bitmap of the level's corners
+    // (node ids grow with the corner indices) rather than listed once per block and sorted, which on
+    // porous sets took 8 ids per candidate block (docs/benchmarks.md §26).
     auto corner = [&](std::int64_t b, int a, int bit) { return std::min<std::int64_t>((b + bit) * stride, l.cells[a]); };
-    for (std::int64_t id : candidates) {
-      const auto c = g.coords(id);
-      for (int v = 0; v < 8; ++v)
-        keys.push_back(geo.node_id(corner(c[0], 0, v & 1), corner(c[1], 1, (v >> 1) & 1), corner(c[2], 2, (v >> 2) & 1)));
+    std::vector<std::int64_t> keys;
+    {
+      const std::int64_t cx = g.count[0] + 1, cy = g.count[1] + 1, cz = g.count[2] + 1;
+      std::vector<bool> on(std::size_t(cx * cy * cz), false);
+      for (std::int64_t id : candidates) {
+        const auto c = g.coords(id);
+        for (int v = 0; v < 8; ++v)
+          on[std::size_t((c[0] + (v & 1)) + cx * ((c[1] + ((v >> 1) & 1)) + cy * (c[2] + ((v >> 2) & 1))))] = true;
+      }
+      std::size_t n = 0;
+      for (bool b : on) n += b;
+      keys.reserve(n);
+      for (std::int64_t k = 0, at = 0; k < cz; ++k)
+        for (std::int64_t j = 0; j < cy; ++j)
+          for (std::int64_t i = 0; i < cx; ++i, ++at)
+            if (on[std::size_t(at)]) keys.push_back(geo.node_id(corner(i, 0, 0), corner(j, 1, 0), corner(k, 2, 0)));
     }
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     std::vector<double> values(keys.size());
     {
       std::vector<std::size_t> fresh;  // indices into keys of the nodes not known yet
@@ -108,20 +118,26 @@ std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOpt
     }
     // Dilate by the margin (at least one block).
     const int m = std::max(1, (o.coarse_margin_cells + stride - 1) / stride);
-    std::vector<std::int64_t> marked;
-    marked.reserve(crossing.size() * 8);
-    for (std::int64_t id : crossing) {
-      const auto c = g.coords(id);
-      for (std::int64_t dk = -m; dk <= m; ++dk)
-        for (std::int64_t dj = -m; dj <= m; ++dj)
-          for (std::int64_t di = -m; di <= m; ++di) {
-            const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
-            if (i < 0 || j < 0 || k < 0 || i >= g.count[0] || j >= g.count[1] || k >= g.count[2]) continue;
-            marked.push_back(g.id(i, j, k));
-          }
+    std::vector<std::int64_t> marked;  // sorted and unique, through a bitmap of the level's blocks
+    {
+      std::vector<bool> on(std::size_t(g.count[0] * g.count[1] * g.count[2]), false);
+      for (std::int64_t id : crossing) {
+        const auto c = g.coords(id);
+        for (std::int64_t dk = -m; dk <= m; ++dk)
+          for (std::int64_t dj = -m; dj <= m; ++dj)
+            for (std::int64_t di = -m; di <= m; ++di) {
+              const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
+              if (i < 0 || j < 0 || k < 0 || i >= g.count[0] || j >= g.count[1] || k >= g.count[2]) continue;
+              on[std::size_t(g.id(i, j, k))] = true;
+            }
+      }
+      crossing = {};
+      std::size_t n = 0;
+      for (bool b : on) n += b;
+      marked.reserve(n);
+      for (std::size_t id = 0; id < on.size(); ++id)
+        if (on[id]) marked.push_back(std::int64_t(id));
     }
-    std::sort(marked.begin(), marked.end());
-    marked.erase(std::unique(marked.begin(), marked.end()), marked.end());
     done = 0.5 * (done + 1.0);
     progress.update(done, std::to_string(marked.size()) + " blocks of " + std::to_string(stride) + " cells");
     if (stride == o.block_cells) {

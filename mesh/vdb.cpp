@@ -1,5 +1,7 @@
 #include "mesh/vdb.h"
 
+#include <unistd.h>
+
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/LevelSetUtil.h>
@@ -7,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -107,6 +110,50 @@ void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
   WriteGridAtomically(path, SparseGrid(path, origin, spacing, voxels, values, background, iso, name, quantity,
                                        coordinates));
 }
+
+struct SparseVdbBuilder::Impl {
+  openvdb::FloatGrid::Ptr grid;
+  openvdb::FloatGrid::Accessor acc;
+  explicit Impl(openvdb::FloatGrid::Ptr g) : grid(std::move(g)), acc(grid->getAccessor()) {}
+};
+
+SparseVdbBuilder::SparseVdbBuilder(const Vec3& origin, double spacing, float background, double iso,
+                                   const std::string& name, const std::string& quantity,
+                                   const std::string& coordinates) {
+  impl_ = std::make_unique<Impl>(SparseGrid(name, origin, spacing, {}, {}, background, iso, name, quantity, coordinates));
+}
+
+SparseVdbBuilder::~SparseVdbBuilder() = default;
+
+void SparseVdbBuilder::Add(const std::vector<std::array<int, 3>>& voxels, const std::vector<float>& values) {
+  if (voxels.size() != values.size()) throw Error("VDB: voxel and value counts differ");
+  for (std::size_t n = 0; n < voxels.size(); ++n)
+    impl_->acc.setValueOn(openvdb::Coord(voxels[n][0], voxels[n][1], voxels[n][2]), values[n]);
+}
+
+void SparseVdbBuilder::Write(const std::string& path) const {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  try {
+    {
+      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+      if (!out) throw Error(path + ": cannot write VDB: cannot create " + tmp);
+      openvdb::io::Stream(out).write(openvdb::GridCPtrVec{impl_->grid});
+      out.flush();
+      if (!out) throw Error(path + ": cannot write VDB: write failed");
+    }
+    std::filesystem::rename(tmp, path);
+  } catch (const Error&) {
+    std::filesystem::remove(tmp);
+    throw;
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw Error(path + ": cannot write VDB: " + e.what());
+  }
+}
+
+std::int64_t SparseVdbBuilder::memory_bytes() const { return std::int64_t(impl_->grid->memUsage()); }
+std::int64_t SparseVdbBuilder::active_voxels() const { return std::int64_t(impl_->grid->activeVoxelCount()); }
 
 std::string VdbVolumeOptions::Validate() const {
   if (!(voxel_size > 0) || !std::isfinite(voxel_size)) return "the voxel size must be finite and > 0";

@@ -7,6 +7,8 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,6 +30,27 @@ void WriteVdbSparse(const std::string& path, const Vec3& origin, double spacing,
                     const std::vector<std::array<int, 3>>& voxels, const std::vector<float>& values,
                     float background, double iso, const std::string& name, const std::string& quantity,
                     const std::string& coordinates);
+
+// The same grid built piece by piece (the mesher's narrow band as its tiles finish, for streamed
+// meshing), so that only OpenVDB's sparse tree is held, not the samples; Write gives the bytes
+// WriteVdbSparse gives for the samples in the order added (but the file's random UUID), streamed to
+// a temporary file and renamed into place.
+class SparseVdbBuilder {
+ public:
+  SparseVdbBuilder(const Vec3& origin, double spacing, float background, double iso, const std::string& name,
+                   const std::string& quantity, const std::string& coordinates);
+  ~SparseVdbBuilder();
+  SparseVdbBuilder(const SparseVdbBuilder&) = delete;
+  SparseVdbBuilder& operator=(const SparseVdbBuilder&) = delete;
+  void Add(const std::vector<std::array<int, 3>>& voxels, const std::vector<float>& values);
+  void Write(const std::string& path) const;  // atomic; throws quijibo::Error
+  std::int64_t memory_bytes() const;          // the tree's (OpenVDB's memUsage)
+  std::int64_t active_voxels() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // Volumes that Houdini and Blender use as they are (issue 16), from a welded triangle mesh:
 //  - "surface": a narrow-band level set (GRID_LEVEL_SET) built by openvdb::tools::meshToLevelSet:

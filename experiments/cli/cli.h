@@ -34,8 +34,9 @@ void AddReportHtmlCommand(CLI::App& app);  // report-html: a results folder's re
 // Every subcommand above, in this order, and `settings` (experiments/cli/commands.cpp).
 void AddCommands(CLI::App& app);
 
-// `quijibo mesh` with another mesher (quijibo-mpi, docs/mpi.md; pipeline::Mesher).
-void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher);
+// `quijibo mesh` with other meshers, in memory and streamed (quijibo-mpi, docs/mpi.md; pipeline::Mesher,
+// pipeline::StreamMesher).
+void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher, const pipeline::StreamMesher& stream_mesher);
 
 // The mesher's options (--dense, --speck-removal, --surface-following, the sparse search's settings),
 // one definition shared by `quijibo mesh`, `modulus` and `portal` (mesher_options.cpp); the

@@ -95,7 +95,7 @@ struct JuliaArgs {
   }
 };
 
-void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
+void AddMesh(CLI::App& app, const pipeline::Mesher& mesher, const pipeline::StreamMesher& stream_mesher) {
   struct Args {
     std::string map, box, summary;
     pipeline::MeshFiles files;
@@ -128,8 +128,8 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
               "triangles) and no mesh files");
   c->add_option("--summary", a->summary, "Write the run summary (JSON) here instead of stdout");
   a->j.add(c, {"resolution", "iterations", "escape", "capture", "iso", "iteration_frame", "detail", "translate_potential",
-               "frame", "precision", "kernel"});
-  c->callback([a, mesher] {
+               "frame", "precision", "kernel", "stream"});
+  c->callback([a, mesher, stream_mesher] {
     pipeline::MeshStageOptions& o = a->j.o;
     // The output names first; their folders are created when the mesh is ready to be written.
     pipeline::MeshFiles names = a->files;
@@ -144,7 +144,11 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher) {
       o.rotation = ParseNumbers(a->j.rotate, "--rotate");
       if (o.rotation.size() != 4) throw Error("--rotate: expected ax,ay,az,degrees");
     }
-    const pipeline::MeshStageResult r = pipeline::MeshJulia(map, o, mesher);
+    if (o.stream)  // the scratch files are made beside the outputs while meshing
+      for (const std::string& p : {a->files.out, a->files.vdb})
+        if (!p.empty()) CreateParentFolder(p);
+    const pipeline::MeshStageResult r =
+        o.stream ? pipeline::MeshJuliaStreamed(map, o, a->files, stream_mesher) : pipeline::MeshJulia(map, o, mesher);
     if (!r.writer) return;
     if (r.empty() && !a->allow_empty)
       throw Error(a->map + ": the surface log|q_n| = " + std::to_string(o.iso) +
@@ -465,10 +469,12 @@ void AddBenchMesh(CLI::App* bench) {
 
 }  // namespace
 
-void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher) { AddMesh(app, mesher); }
+void AddMeshCommand(CLI::App& app, const pipeline::Mesher& mesher, const pipeline::StreamMesher& stream_mesher) {
+  AddMesh(app, mesher, stream_mesher);
+}
 
 void AddJuliaCommands(CLI::App& app, CLI::App& bench) {
-  AddMesh(app, pipeline::LocalMesher);
+  AddMesh(app, pipeline::LocalMesher, pipeline::LocalStreamMesher);
   AddPicture(app);
   AddBenchMesh(&bench);
 }

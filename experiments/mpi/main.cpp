@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
         "Run it under mpirun/srun; every rank gets the same arguments."};
     bool quiet = false;
     quijibo::cli::SetUpApp(app, "quijibo-mpi", quiet, rank != 0);
-    quijibo::cli::AddMeshCommand(app, quijibo::mpi::MpiMesher);
+    quijibo::cli::AddMeshCommand(app, quijibo::mpi::MpiMesher, quijibo::mpi::MpiStreamMesher);
     quijibo::mpi::AddSweep(app);
     try {
       app.parse(argc, argv);

@@ -2,7 +2,8 @@
 // ranks (Allgatherv, so every rank holds the same tile plan); then rank 0 hands out batches of tiles
 // on demand over the work queue (tiles differ wildly in surface), meshes batches itself on a second
 // thread, receives the pieces (vertices keyed by global edge id) as they finish, welds them in tile
-// order and writes. The result does not depend on which rank meshed which tile: it is the
+// order and writes (or, with --stream, streams them to the PLY as they arrive: MeshStreamWriter).
+// The result does not depend on which rank meshed which tile: it is the
 // single-process mesh, bit for bit.
 #include <omp.h>
 
@@ -10,7 +11,9 @@
 #include <chrono>
 #include <climits>
 #include <cstdio>
+#include <functional>
 #include <future>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "experiments/mpi/mpi.h"
@@ -106,12 +109,12 @@ struct CoordinatorReport {
 };
 
 // Rank 0: the tiles through the work queue; its own batches run on a second thread (MPI stays on
-// this one).
-std::vector<mesh::TilePiece> MeshTiles(const mesh::BatchField& field, const mesh::TilePlan& plan, bool want_band,
-                                       bool progress_on, CoordinatorReport& report) {
+// this one). Every piece goes to `consume` (on this thread) as it arrives.
+using Consumer = std::function<void(std::int64_t index, mesh::TilePiece&& piece)>;
+void MeshTiles(const mesh::BatchField& field, const mesh::TilePlan& plan, bool want_band, bool progress_on,
+               CoordinatorReport& report, const Consumer& consume) {
   const int P = Size();
   const std::int64_t n = std::int64_t(plan.tile_ids.size());
-  std::vector<mesh::TilePiece> pieces(static_cast<std::size_t>(n));
   report.tiles_by_rank.assign(std::size_t(P), 0);
   std::int64_t next = 0, received = 0;
   const int own_threads = omp_get_max_threads();
@@ -119,7 +122,7 @@ std::vector<mesh::TilePiece> MeshTiles(const mesh::BatchField& field, const mesh
   Progress progress("mesh: tiles", double(n), !progress_on);
   auto store = [&](std::int64_t index, mesh::TilePiece&& piece, int rank) {
     if (index < 0 || index >= n) throw Error("quijibo-mpi: a worker sent an unknown tile");
-    pieces[std::size_t(index)] = std::move(piece);
+    consume(index, std::move(piece));
     ++received;
     ++report.tiles_by_rank[std::size_t(rank)];
     progress.update(double(received),
@@ -159,7 +162,43 @@ std::vector<mesh::TilePiece> MeshTiles(const mesh::BatchField& field, const mesh
   c.finished = [&] { return received == n && !own.valid(); };
   Coordinate(c);
   progress.finish();
-  return pieces;
+}
+
+// The workers' side: batches of tiles meshed and sent back to rank 0.
+void WorkTiles(const mesh::BatchField& field, const mesh::TilePlan& plan, bool want_band) {
+  Work(omp_get_max_threads(), [&](const std::vector<std::int64_t>& batch) {
+    Writer w;
+    const auto done = MeshBatch(field, plan, batch, want_band);
+    w.pod(std::int64_t(done.size()));
+    for (const auto& [index, piece] : done) PackPiece(w, index, piece);
+    return w.bytes;
+  });
+}
+
+// The field's counters, summed on rank 0.
+void ReduceStats(mesh::JuliaFieldStats* stats) {
+  std::int64_t local[4] = {0, 0, 0, 0}, total[4] = {0, 0, 0, 0};
+  if (stats)
+    local[0] = stats->evaluations, local[1] = stats->escaped, local[2] = stats->non_finite,
+    local[3] = stats->applications;
+  MPI_Reduce(local, total, 4, MPI_INT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
+  if (stats && Rank() == 0)
+    stats->evaluations = total[0], stats->escaped = total[1], stats->non_finite = total[2],
+    stats->applications = total[3];
+}
+
+void PrintTiming(double t0, double t_plan, double t_mesh, double t_weld, const mesh::TilePlan& plan,
+                 const CoordinatorReport& report, bool streamed) {
+  const json timing = {{"ranks", Size()},
+                       {"threads_per_rank", omp_get_max_threads()},
+                       {"search_seconds", t_plan - t0},
+                       {"mesh_seconds", t_mesh - t_plan},
+                       {streamed ? "finish_seconds" : "weld_seconds", t_weld - t_mesh},
+                       {"streamed", streamed},
+                       {"tiles", plan.tile_ids.size()},
+                       {"tiles_by_rank", report.tiles_by_rank},
+                       {"bytes_received", report.bytes_received}};
+  std::fprintf(stderr, "quijibo-mpi: %s\n", timing.dump().c_str());
 }
 
 }  // namespace
@@ -174,40 +213,48 @@ bool MpiMesher(const mesh::BatchField& field, const mesh::MeshingOptions& option
   std::vector<mesh::TilePiece> pieces;
   CoordinatorReport report;
   if (rank == 0) {
-    pieces = MeshTiles(field, plan, want_band, options.show_progress, report);
+    pieces.resize(plan.tile_ids.size());
+    MeshTiles(field, plan, want_band, options.show_progress, report,
+              [&](std::int64_t index, mesh::TilePiece&& piece) { pieces[std::size_t(index)] = std::move(piece); });
   } else {
-    Work(omp_get_max_threads(), [&](const std::vector<std::int64_t>& batch) {
-      Writer w;
-      const auto done = MeshBatch(field, plan, batch, want_band);
-      w.pod(std::int64_t(done.size()));
-      for (const auto& [index, piece] : done) PackPiece(w, index, piece);
-      return w.bytes;
-    });
+    WorkTiles(field, plan, want_band);
   }
   const double t_mesh = Now();
-  // The field's counters, summed on rank 0.
-  std::int64_t local[4] = {0, 0, 0, 0}, total[4] = {0, 0, 0, 0};
-  if (stats)
-    local[0] = stats->evaluations, local[1] = stats->escaped, local[2] = stats->non_finite,
-    local[3] = stats->applications;
-  MPI_Reduce(local, total, 4, MPI_INT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
+  ReduceStats(stats);
   if (rank != 0) return false;
-  if (stats)
-    stats->evaluations = total[0], stats->escaped = total[1], stats->non_finite = total[2],
-    stats->applications = total[3];
   *mesh = mesh::WeldTilePieces(plan, pieces, summary, band);
   const double t_weld = Now();
   if (summary) summary->seconds = t_weld - t0;
-  const json timing = {{"ranks", P},
-                       {"threads_per_rank", omp_get_max_threads()},
-                       {"search_seconds", t_plan - t0},
-                       {"mesh_seconds", t_mesh - t_plan},
-                       {"weld_seconds", t_weld - t_mesh},
-                       {"tiles", plan.tile_ids.size()},
-                       {"tiles_by_rank", report.tiles_by_rank},
-                       {"bytes_received", report.bytes_received}};
-  std::fprintf(stderr, "quijibo-mpi: %s\n", timing.dump().c_str());
+  PrintTiming(t0, t_plan, t_mesh, t_weld, plan, report, false);
   return true;
+}
+
+std::optional<mesh::MeshStreamReport> MpiStreamMesher(const mesh::BatchField& field,
+                                                      const mesh::MeshingOptions& options,
+                                                      const mesh::MeshStreamOptions& stream,
+                                                      mesh::MeshingSummary* summary, mesh::JuliaFieldStats* stats) {
+  const int P = Size(), rank = Rank();
+  const double t0 = Now();
+  const mesh::TilePlan plan = mesh::PlanTiles(field, options, P > 1 ? SpreadSearch(field) : mesh::PointsEvaluator{});
+  const double t_plan = Now();
+  const bool want_band = stream.band != nullptr;
+  CoordinatorReport report;
+  std::unique_ptr<mesh::MeshStreamWriter> writer;
+  if (rank == 0) {
+    writer = std::make_unique<mesh::MeshStreamWriter>(plan, stream);
+    MeshTiles(field, plan, want_band, options.show_progress, report,
+              [&](std::int64_t index, mesh::TilePiece&& piece) { writer->Add(std::size_t(index), std::move(piece)); });
+  } else {
+    WorkTiles(field, plan, want_band);
+  }
+  const double t_mesh = Now();
+  ReduceStats(stats);
+  if (rank != 0) return std::nullopt;
+  const mesh::MeshStreamReport r = writer->Finish(summary);
+  const double t_done = Now();
+  if (summary) summary->seconds = t_done - t0;
+  PrintTiming(t0, t_plan, t_mesh, t_done, plan, report, true);
+  return r;
 }
 
 }  // namespace quijibo::mpi

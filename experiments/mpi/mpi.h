@@ -12,6 +12,13 @@ namespace quijibo::mpi {
 bool MpiMesher(const mesh::BatchField& field, const mesh::MeshingOptions& options, mesh::MeshingSummary* summary,
                mesh::FieldBand* band, mesh::TriangleMesh* mesh, mesh::JuliaFieldStats* stats);
 
+// A pipeline::StreamMesher over the ranks: rank 0 streams the pieces to the PLY as they arrive (the
+// single-process file, byte for byte); nothing on workers.
+std::optional<mesh::MeshStreamReport> MpiStreamMesher(const mesh::BatchField& field,
+                                                      const mesh::MeshingOptions& options,
+                                                      const mesh::MeshStreamOptions& stream,
+                                                      mesh::MeshingSummary* summary, mesh::JuliaFieldStats* stats);
+
 // `quijibo-mpi sweep SWEEP.json`.
 void AddSweep(CLI::App& app);
 

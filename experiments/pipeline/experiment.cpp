@@ -168,6 +168,11 @@ Experiment Experiment::FromJson(const json& doc, const std::string& source, cons
       r.fail("/intricate/optimizer",
              CheckValue(json(e.intricate.optimizer), SettingType::kChoice, 0, 0, false, false, names, {}));
     if (std::string why = e.intricate.Validate(); !why.empty()) r.fail("/intricate", why);
+    // A streamed mesh is never whole in memory: the .vdb's grids and the OBJ cannot be made of it.
+    for (const auto& [p, m] : {std::pair<std::string, const MeshStageOptions*>{"/mesh", &e.mesh}, {"/intricate", &e.intricate}})
+      if (m->stream && (m->vdb || m->obj))
+        r.fail(p + "/stream", std::string("a streamed mesh needs \"") + (m->vdb ? "vdb" : "obj") +
+                                  "\": false (its grids are made from the whole mesh)");
   }
   if (method == "modulus") {
     ModulusStageOptions start;

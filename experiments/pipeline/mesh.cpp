@@ -36,6 +36,17 @@ bool Wants(const MeshStageOptions& o, const char* grid) {
   return std::find(o.vdb_grids.begin(), o.vdb_grids.end(), grid) != o.vdb_grids.end();
 }
 
+// From the box coordinates the mesher used to the fractal frame (rotation), then the user frame.
+std::function<Vec3(const Vec3&)> OutputTransform(const MeshStageResult& r, const MeshStageOptions& o) {
+  const bool rotate = !r.julia.placement.is_identity(), user = o.frame == "user";
+  return [rotate, user, placement = r.julia.placement, frame = r.frame](const Vec3& x) {
+    Vec3 v = x;
+    if (rotate) v = placement.apply(v);
+    if (user) v = frame.fractal_to_user(v);
+    return v;
+  };
+}
+
 }  // namespace
 
 const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
@@ -102,6 +113,15 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
                   [](auto& o) -> std::string& { return o.frame; }, {"user", "fractal"})
           .Boolean("vdb", "", "Also write julia.vdb", [](auto& o) -> bool& { return o.vdb; })
           .Boolean("obj", "", "Also write julia.obj", [](auto& o) -> bool& { return o.obj; })
+          .Boolean("stream", "--stream",
+                   "Write the PLY (and the .vdb's field grid) as the tiles finish: memory bounded by the front of "
+                   "tiles, not by the mesh; the same bytes as without it. Face indices int up to 2^31 vertices, uint "
+                   "up to 2^32, uint64 beyond; no OBJ, and the .vdb holds only the grid field (docs/meshing.md)",
+                   [](auto& o) -> bool& { return o.stream; })
+          .Doc("write julia.ply as the mesher's tiles finish, memory bounded by the front of tiles rather than by "
+               "the mesh; the file is the same, byte for byte; needs `vdb` and `obj` false (the .vdb's grids and the "
+               "OBJ are made from the whole mesh) and leaves out the summary's `detail` ([meshing.md](meshing.md) "
+               "\"Streaming to disk\")")
           .Enum(
               "precision", "--precision", "Iteration precision: float, double, long-double or float128", kPrecisionNames,
               [](const MeshStageOptions& o) { return PrecisionName(o.precision); },
@@ -156,7 +176,12 @@ MeshStageOptions MeshStageOptions::FromJson(const JsonReader& r, const std::stri
   return Settings().FromJson(r, p, base, start);
 }
 
-json MeshStageOptions::ToJson() const { return Settings().ToJson(*this); }
+json MeshStageOptions::ToJson() const {
+  json j = Settings().ToJson(*this);
+  // Off is left out, so that the stage caches of runs made before the key existed stay valid.
+  if (!stream) j.erase("stream");
+  return j;
+}
 
 bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& o, mesh::MeshingSummary* summary,
                  mesh::FieldBand* band, mesh::TriangleMesh* mesh, mesh::JuliaFieldStats*) {
@@ -169,18 +194,28 @@ MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& 
   return MeshJulia(MakeJuliaSetup(input_map, o.Setup()), o, mesher);
 }
 
-MeshStageResult MeshJulia(const JuliaSetup& setup, const MeshStageOptions& o, const Mesher& mesher) {
+namespace {
+
+// The result's settings as used: the box, the frame, the detail's factor and the placement.
+MeshStageResult StartResult(const JuliaSetup& setup, const MeshStageOptions& o) {
   if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
   MeshStageResult r;
-  const RationalMap& map = setup.map;
   r.lambda = setup.lambda;
-  r.frame = map.frame;
+  r.frame = setup.map.frame;
   r.meshing = o.meshing;
-  mesh::MeshingOptions& m = r.meshing;
-  m.min_corner = setup.box_min;
-  m.max_corner = setup.box_max;
-  if (auto why = m.Validate(); !why.empty()) throw Error("mesh: " + why);
+  r.meshing.min_corner = setup.box_min;
+  r.meshing.max_corner = setup.box_max;
+  if (auto why = r.meshing.Validate(); !why.empty()) throw Error("mesh: " + why);
   r.julia = setup.julia;
+  return r;
+}
+
+}  // namespace
+
+MeshStageResult MeshJulia(const JuliaSetup& setup, const MeshStageOptions& o, const Mesher& mesher) {
+  MeshStageResult r = StartResult(setup, o);
+  const RationalMap& map = setup.map;
+  mesh::MeshingOptions& m = r.meshing;
   mesh::JuliaFieldStats stats;
   const mesh::BatchField field = mesh::MakeJuliaField(map, r.julia, o.iso, o.precision, &stats,
                                                        ParseJuliaKernel(o.kernel));
@@ -190,12 +225,60 @@ MeshStageResult MeshJulia(const JuliaSetup& setup, const MeshStageOptions& o, co
   r.non_finite = stats.non_finite;
   r.applications = stats.applications;
   r.factors = JuliaMap<double>(map, r.julia).Factors().size();
-  // From the box coordinates the mesher used to the fractal frame (rotation), then the user frame.
-  const bool rotate = !r.julia.placement.is_identity(), user = o.frame == "user";
-  for (Vec3& v : r.mesh.vertices) {
-    if (rotate) v = r.julia.placement.apply(v);
-    if (user) v = map.frame.fractal_to_user(v);
+  const auto to_output = OutputTransform(r, o);
+  for (Vec3& v : r.mesh.vertices) v = to_output(v);
+  return r;
+}
+
+std::optional<mesh::MeshStreamReport> LocalStreamMesher(const mesh::BatchField& field, const mesh::MeshingOptions& o,
+                                                        const mesh::MeshStreamOptions& stream,
+                                                        mesh::MeshingSummary* summary, mesh::JuliaFieldStats*) {
+  return mesh::MeshFieldStreamed(field, o, stream, summary);
+}
+
+MeshStageResult MeshJuliaStreamed(const RationalMap& input_map, const MeshStageOptions& o, const MeshFiles& f,
+                                  const StreamMesher& mesher) {
+  if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
+  return MeshJuliaStreamed(MakeJuliaSetup(input_map, o.Setup()), o, f, mesher);
+}
+
+MeshStageResult MeshJuliaStreamed(const JuliaSetup& setup, const MeshStageOptions& o, const MeshFiles& f,
+                                  const StreamMesher& mesher) {
+  if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
+  if (Extension(f.out) != ".ply") throw Error(f.out + ": a streamed mesh is written as PLY (.ply)");
+  if (!f.obj.empty()) throw Error(f.obj + ": no OBJ when streaming (it would need the whole mesh)");
+  const bool field_grid = Wants(o, "field");
+  if (!f.vdb.empty() && (Wants(o, "surface") || Wants(o, "density") || !field_grid))
+    throw Error(f.vdb + ": when streaming, the .vdb holds only the grid \"field\" (--vdb-grids field): the "
+                "surface and density grids are built from the whole mesh");
+  MeshStageResult r = StartResult(setup, o);
+  const RationalMap& map = setup.map;
+  mesh::MeshingOptions& m = r.meshing;
+  mesh::JuliaFieldStats stats;
+  const mesh::BatchField field = mesh::MakeJuliaField(map, r.julia, o.iso, o.precision, &stats,
+                                                       ParseJuliaKernel(o.kernel));
+  mesh::MeshStreamOptions so;
+  so.path = f.out;
+  so.precision = o.ply_double ? mesh::PlyPrecision::kFloat64 : mesh::PlyPrecision::kFloat32;
+  so.transform = OutputTransform(r, o);
+  // The .vdb's field grid, filled as the pieces pass (as WriteMeshFiles' raw grid).
+  std::unique_ptr<mesh::SparseVdbBuilder> vdb;
+  if (!f.vdb.empty() && field_grid) {
+    const bool user = o.frame == "user";
+    const mesh::MeshLattice l = mesh::LatticeFor(m);
+    vdb = std::make_unique<mesh::SparseVdbBuilder>(user ? r.frame.fractal_to_user(l.origin) : l.origin,
+                                                   l.spacing / (user ? r.frame.user_to_fractal_scale() : 1.0),
+                                                   std::numeric_limits<float>::max(), o.iso, "julia", "log-modulus",
+                                                   user ? "user" : "fractal");
+    so.band = [&vdb](const mesh::TilePiece& p) { vdb->Add(p.band_nodes, p.band_values); };
   }
+  r.streamed = mesher(field, m, so, &r.summary, &stats);
+  r.writer = r.streamed.has_value();
+  r.escaped = stats.escaped;
+  r.non_finite = stats.non_finite;
+  r.applications = stats.applications;
+  r.factors = JuliaMap<double>(map, r.julia).Factors().size();
+  if (r.writer && vdb && !r.empty()) vdb->Write(f.vdb);
   return r;
 }
 
@@ -206,7 +289,7 @@ void CheckMeshFiles(const MeshFiles& f) {
 }
 
 void WriteMeshFiles(const MeshStageResult& r, const MeshStageOptions& o, const MeshFiles& f) {
-  if (r.empty()) return;
+  if (r.empty() || r.streamed) return;  // streamed: written as the tiles finished
   if (Extension(f.out) == ".obj")
     mesh::WriteObj(f.out, r.mesh);
   else
@@ -249,7 +332,13 @@ json JuliaJson(const JuliaOptions& j, double iso, Precision precision) {
 }
 
 json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std::string& map_path, const MeshFiles& f) {
-  const mesh::MeshTopology topo = mesh::AnalyzeTopology(r.mesh);
+  mesh::MeshTopology topo;
+  if (r.streamed) {  // counted on the front as the triangles were written
+    topo.boundary_edges = r.summary.open_edges;
+    topo.non_manifold_edges = r.streamed->non_manifold_edges;
+  } else {
+    topo = mesh::AnalyzeTopology(r.mesh);
+  }
   const mesh::MeshingSummary& s = r.summary;
   json summary = {{"map", map_path},
                   {"out", r.empty() ? json(nullptr) : json(f.out)},
@@ -269,12 +358,17 @@ json MeshSummary(const MeshStageResult& r, const MeshStageOptions& o, const std:
                   {"resolution", r.meshing.resolution},
                   {"cells", s.cells},
                   {"spacing", s.spacing},
-                  {"band_nodes", r.band.nodes.size()}};
+                  {"band_nodes", r.streamed ? std::size_t(r.streamed->band_samples) : r.band.nodes.size()}};
   summary.update(MesherSummaryJson(s, r.meshing));
   summary["boundary_edges"] = topo.boundary_edges;  // = open_edges (kept for older readers)
   summary["non_manifold_edges"] = topo.non_manifold_edges;
   summary["evaluations"]["escaped"] = r.escaped;
   summary["evaluations"]["applications"] = r.applications;
+  if (r.streamed)
+    summary["streamed"] = {{"index_type", r.streamed->index_type},
+                           {"bytes", r.streamed->bytes},
+                           {"peak_front_tiles", r.streamed->peak_front_tiles},
+                           {"peak_front_triangles", r.streamed->peak_front_triangles}};
   return summary;
 }
 

@@ -11,6 +11,7 @@
 #include "experiments/pipeline/settings.h"
 #include "mesh/julia_field.h"
 #include "mesh/marching_cubes.h"
+#include "mesh/mesh_stream.h"
 #include "mesh/triangle_mesh.h"
 #include "quijibo/julia.h"
 #include "quijibo/julia_setup.h"
@@ -57,6 +58,9 @@ struct MeshStageOptions {
   std::vector<std::string> vdb_grids{"surface", "density"};  // of the .vdb: surface, density, field
   double vdb_band = 3.0;                                     // half-width of the level set's narrow band, voxels
   bool ply_double = false;                                   // PLY coordinates as double
+  // Write the PLY (and the .vdb's field grid) as the tiles finish, with memory bounded by the front of
+  // tiles, not the mesh (MeshJuliaStreamed; docs/meshing.md "Streaming to disk").
+  bool stream = false;
   // `quijibo run` only.
   bool enabled = true;
   bool vdb = true, obj = false;  // also julia.vdb, julia.obj
@@ -82,6 +86,23 @@ using Mesher = std::function<bool(const mesh::BatchField& field, const mesh::Mes
 bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& options, mesh::MeshingSummary* summary,
                  mesh::FieldBand* band, mesh::TriangleMesh* mesh, mesh::JuliaFieldStats* stats);
 
+// Where the files go: `out` (.ply or .obj), and when not empty an extra OBJ and a .vdb.
+struct MeshFiles {
+  std::string out, obj, vdb;
+};
+
+// A streaming mesher meshes like MeshFieldStreamed (mesh/mesh_stream.h: the PLY written as tiles
+// finish, the summary filled); it returns the report on the process that wrote, nothing elsewhere
+// (MPI workers), and may add other processes' counts into `stats`.
+using StreamMesher = std::function<std::optional<mesh::MeshStreamReport>(
+    const mesh::BatchField& field, const mesh::MeshingOptions& options, const mesh::MeshStreamOptions& stream,
+    mesh::MeshingSummary* summary, mesh::JuliaFieldStats* stats)>;
+// MeshFieldStreamed on this process.
+std::optional<mesh::MeshStreamReport> LocalStreamMesher(const mesh::BatchField& field,
+                                                        const mesh::MeshingOptions& options,
+                                                        const mesh::MeshStreamOptions& stream,
+                                                        mesh::MeshingSummary* summary, mesh::JuliaFieldStats* stats);
+
 struct MeshStageResult {
   bool writer = true;       // false on processes that do not write (the mesher's answer)
   mesh::TriangleMesh mesh;  // in the output frame (user or fractal, rotation applied)
@@ -94,7 +115,9 @@ struct MeshStageResult {
   std::int64_t escaped = 0, non_finite = 0;
   std::int64_t applications = 0;  // map applications done, all field evaluations together
   std::size_t factors = 0;        // roots with a non-zero exponent (one factor each per application)
-  bool empty() const { return mesh.triangles.empty(); }
+  // Streamed (MeshJuliaStreamed): the files are written and `mesh` and `band` stay empty.
+  std::optional<mesh::MeshStreamReport> streamed;
+  bool empty() const { return streamed ? summary.triangles == 0 : mesh.triangles.empty(); }
 };
 
 // Meshes `map`'s Julia set. Throws quijibo::Error on invalid options.
@@ -102,10 +125,14 @@ MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& option
 // The same on the iterated map made already (MakeJuliaSetup(map, options.Setup())).
 MeshStageResult MeshJulia(const JuliaSetup& setup, const MeshStageOptions& options, const Mesher& mesher = LocalMesher);
 
-// Where the files go: `out` (.ply or .obj), and when not empty an extra OBJ and a .vdb.
-struct MeshFiles {
-  std::string out, obj, vdb;
-};
+// Meshes `map`'s Julia set streamed to files.out (a .ply; no OBJ) and files.vdb (only the grid
+// "field": the others are built from the whole mesh), written as the tiles finish; the PLY is the one
+// MeshJulia + WriteMeshFiles write, byte for byte. Throws quijibo::Error; nothing is left on failure.
+MeshStageResult MeshJuliaStreamed(const RationalMap& map, const MeshStageOptions& options, const MeshFiles& files,
+                                  const StreamMesher& mesher = LocalStreamMesher);
+// The same on the iterated map made already.
+MeshStageResult MeshJuliaStreamed(const JuliaSetup& setup, const MeshStageOptions& options, const MeshFiles& files,
+                                  const StreamMesher& mesher = LocalStreamMesher);
 // Fails early (before meshing) when a path has the wrong extension or its folder does not exist.
 void CheckMeshFiles(const MeshFiles& files);
 // Writes the mesh files (nothing for an empty set).

@@ -412,7 +412,8 @@ std::string Runner::MeshStage(const std::string& folder, const MeshStageOptions&
     const RationalMap map = ReadMap(map_path);
     MeshStageResult r;
     try {
-      r = MeshJulia(*IteratedMap(map_path, options), mo);
+      const auto setup = IteratedMap(map_path, options);
+      r = mo.stream ? MeshJuliaStreamed(*setup, mo, f) : MeshJulia(*setup, mo);
     } catch (const Error& x) {
       // The intricate surface is an extra: a map it cannot be made of (no inside deep enough for the
       // translation by potential) is reported, and the run goes on.
@@ -427,9 +428,10 @@ std::string Runner::MeshStage(const std::string& folder, const MeshStageOptions&
                    folder == "mesh" ? "" : (folder + " ").c_str());
     WriteMeshFiles(r, mo, f);
     json summary = MeshSummary(r, mo, map_path, f);
-    // How much fractal detail the set has, against the target mesh (mesh/fidelity.h).
+    // How much fractal detail the set has, against the target mesh (mesh/fidelity.h); not of a
+    // streamed mesh, which is not held.
     const TargetOptions& t = *e_.target;
-    if (!r.empty() && !t.mesh.empty() && mo.frame == "user") {
+    if (!r.empty() && !r.streamed && !t.mesh.empty() && mo.frame == "user") {
       const mesh::TriangleMesh shape = mesh::ReadMesh(t.mesh);
       summary["detail"] = mesh::MeasureMeshDetail(r.mesh, &shape, (1.0 - 2.0 * map.frame.padding) / map.frame.scale).ToJson();
     }

@@ -27,6 +27,7 @@ MeshStageOptions IntricateDefaults(const MeshStageOptions& mesh) {
   o.rotation.clear();
   o.vdb = true;
   o.obj = false;
+  o.stream = false;
   return o;
 }
 

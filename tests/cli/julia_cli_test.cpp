@@ -61,6 +61,52 @@ TEST_F(JuliaCli, MeshWritesPlyObjVdbAndASummary) {
   EXPECT_LE(agreement, 1.0);
 }
 
+// --stream: the PLY and the .vdb's field grid are the in-memory ones (byte for byte; the .vdb but its
+// random UUID), in the user frame with a rotation (the output transform) and in double; the summary's
+// counts the same; what it cannot write is refused before meshing, with nothing written.
+TEST_F(JuliaCli, MeshStreamWritesTheSameFiles) {
+  auto slurp = [&](const std::string& name) {
+    std::ifstream in(Path(name), std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string common = " -r 40 -n 2 --tile 8 --rotate 0,1,1,30 --vdb-grids field";
+  for (const std::string& extra : {std::string(), std::string(" --ply-double")}) {
+    SCOPED_TRACE(extra);
+    const CommandResult m = RunQuijibo("mesh " + Path("map.json") + " -o " + Path("m.ply") + " --vdb " + Path("m.vdb") +
+                                       common + extra);
+    ASSERT_EQ(m.code, 0) << m.out;
+    const CommandResult s = RunQuijibo("mesh " + Path("map.json") + " -o " + Path("s/s.ply") + " --vdb " +
+                                       Path("s/s.vdb") + common + extra + " --stream");
+    ASSERT_EQ(s.code, 0) << s.out;
+    const auto jm = nlohmann::json::parse(m.out), js = nlohmann::json::parse(s.out);
+    EXPECT_GT(jm["triangles"].get<int>(), 100);
+    for (const char* key : {"triangles", "vertices", "components", "open_edges", "specks_removed", "boundary_edges",
+                            "non_manifold_edges", "band_nodes"})
+      EXPECT_EQ(js[key], jm[key]) << key;
+    EXPECT_EQ(js["streamed"]["index_type"], "int");
+    EXPECT_FALSE(jm.contains("streamed"));
+    const std::string a = slurp("m.ply"), b = slurp("s/s.ply");
+    EXPECT_EQ(js["streamed"]["bytes"].get<std::size_t>(), b.size());
+    EXPECT_TRUE(a == b) << "the streamed PLY differs (" << a.size() << " and " << b.size() << " bytes)";
+    const std::string va = slurp("m.vdb"), vb = slurp("s/s.vdb");
+    ASSERT_GT(va.size(), 64u);
+    EXPECT_TRUE(va.substr(64) == vb.substr(std::min<std::size_t>(64, vb.size())))
+        << "the .vdb field grids differ after the header's UUID";
+  }
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir_ / "s"), {}), 2) << "no scratch file left";
+  struct Case {
+    std::string args, expect;
+  };
+  for (const Case& c : {Case{" -o " + Path("x.obj"), "written as PLY"},
+                        Case{" -o " + Path("x.ply") + " --obj " + Path("x.obj"), "no OBJ when streaming"},
+                        Case{" -o " + Path("x.ply") + " --vdb " + Path("x.vdb"), "only the grid \"field\""}}) {
+    const CommandResult r = RunQuijibo("mesh " + Path("map.json") + c.args + " -r 24 -n 2 --stream");
+    EXPECT_NE(r.code, 0) << c.args;
+    EXPECT_NE(r.out.find(c.expect), std::string::npos) << r.out;
+    EXPECT_FALSE(Exists("x.ply") || Exists("x.obj") || Exists("x.vdb")) << c.args;
+  }
+}
+
 TEST_F(JuliaCli, DetailAndTheReferenceFrameAreRecordedAndChangeOnlyTheNStepSet) {
   // A steep map (exponents x 60) whose one-step set is its n-step set; --detail widens the band.
   auto m = nlohmann::json::parse(std::ifstream(Path("map.json")));

@@ -123,6 +123,21 @@ TEST(RunTest, ATinyExperimentRunsEndToEndAndIsReusedWhenUnchanged) {
     EXPECT_EQ(s["status"], name == "mesh" || name == "pictures" || name == "triptych" ? "ran" : "reused") << s;
   }
   EXPECT_EQ(json::parse(Slurp(out + "/mesh/summary.json"))["resolution"], 22);
+
+  // The mesh streamed to disk: the mesh stage runs again and writes the same julia.ply.
+  const std::string ply22 = Slurp(out + "/mesh/julia.ply");
+  changed["mesh"]["stream"] = true;
+  changed["mesh"]["vdb"] = false;
+  Write(exp, changed.dump(1));
+  ASSERT_EQ(RunQ({"run", exp, "--out", out, "--quiet"}, &err), 0) << err;
+  for (const json& s : json(RunRecord(out)["stages"])) {
+    if (s["stage"] == "mesh") {
+      EXPECT_EQ(s["status"], "ran") << s;
+    }
+  }
+  EXPECT_EQ(Slurp(out + "/mesh/julia.ply"), ply22);
+  EXPECT_FALSE(fs::exists(out + "/mesh/julia.vdb"));
+  EXPECT_EQ(json::parse(Slurp(out + "/mesh/summary.json"))["streamed"]["index_type"], "int");
   fs::remove_all(dir);
 }
 
@@ -219,6 +234,7 @@ TEST(RunTest, BadExperimentsGiveOneClearLineAndNoResultsFolder) {
       {"zero-res", R"({"target": {"analytic": "torus", "resolution": 0}})", "/target/resolution"},
       {"huge-res", R"({"target": {"analytic": "torus", "resolution": 100000000}})", "/target/resolution"},
       {"mesh-res", "{" + torus + R"(, "mesh": {"resolution": -1}})", "/mesh/resolution"},
+      {"stream-vdb", "{" + torus + R"(, "mesh": {"stream": true}})", "/mesh/stream: a streamed mesh needs \"vdb\": false"},
       {"empty-schedule", "{" + torus + R"(, "optimizer": {"schedule": ""}})", "/optimizer/schedule"},
       {"empty-levels", "{" + torus + R"(, "optimizer": {"schedule": {"levels": []}}})", "/optimizer/schedule/levels"},
       {"bad-notation", "{" + torus + R"j(, "optimizer": {"schedule": "25(VXF)"}})j", "/optimizer/schedule"},
