@@ -33,7 +33,7 @@ struct JuliaFieldStats {
 // (JuliaMap); other precisions are always scalar.
 BatchField MakeJuliaField(const RationalMap& map, const JuliaOptions& options, double iso = 0.0,
                           Precision precision = Precision::kDouble, JuliaFieldStats* stats = nullptr,
-                          JuliaKernel kernel = JuliaKernel::kVector, VectorIsa max_isa = VectorIsa::kAvx512);
+                          JuliaKernel kernel = kDefaultJuliaKernel, VectorIsa max_isa = VectorIsa::kAvx512);
 
 // Any quaternion map's field log|q_n| (quijibo/quaternion_map.h) as a BatchField on points p:
 // q = [s p, 0] with s = `point_scale`; iso 0. `map` is shared by the field.

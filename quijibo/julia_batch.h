@@ -32,6 +32,9 @@ namespace quijibo {
 // sin and cos per factor, everything else in double; its error below) or scalar (the reference).
 enum class JuliaKernel { kVector, kScalar, kFused, kFloat };
 inline const std::vector<std::string> kJuliaKernelNames = {"vector", "fused", "float", "scalar"};
+// The default: fused gave the same meshes as vector, byte for byte, and took 20-22 % less CPU on
+// intricate sets with AVX-512 (the same time with AVX2; docs/benchmarks.md §27).
+inline constexpr JuliaKernel kDefaultJuliaKernel = JuliaKernel::kFused;
 // "vector", "fused", "float" or "scalar"; throws quijibo::Error otherwise.
 JuliaKernel ParseJuliaKernel(const std::string& name);
 const char* JuliaKernelName(JuliaKernel kernel);
@@ -64,7 +67,7 @@ class JuliaBatch {
   // angle e atan2 within ~|e| 2^-22 + |e atan2| 2^-24 (float rounding of the angle), sin and cos
   // within a few float ulp of the rounded angle; after n applications the differences are amplified
   // as in double. Measured in tests/core/julia_batch_test.cpp and on meshes (docs/meshing.md).
-  JuliaBatch(const RationalMap& map, const JuliaOptions& options, JuliaKernel kernel = JuliaKernel::kVector,
+  JuliaBatch(const RationalMap& map, const JuliaOptions& options, JuliaKernel kernel = kDefaultJuliaKernel,
              VectorIsa max_isa = VectorIsa::kAvx512);
 
   // out[i] = JuliaMap<double>::Iterate(q0[i]) up to the vector math library's rounding.
@@ -87,7 +90,7 @@ class JuliaBatch {
   double ln_C_ = 0, log_escape_ = 0, log_capture_ = 0;
   int iterations_ = 0;
   VectorIsa isa_ = VectorIsa::kSse2;
-  JuliaKernel kernel_ = JuliaKernel::kVector;
+  JuliaKernel kernel_ = kDefaultJuliaKernel;
 };
 
 }  // namespace quijibo

@@ -324,7 +324,7 @@ std::vector<std::vector<char>> KernelSetsAtRandomPoints(const RationalMap& input
 // bench mesh: each resolution and kernel in a child process, so that its peak RSS is its own (wait4).
 void AddBenchMesh(CLI::App* bench) {
   struct Args {
-    std::string map, resolutions = "256,512", kernels = "scalar,vector", out;
+    std::string map, resolutions = "256,512", kernels = "scalar,vector,fused", out;
     pipeline::MeshStageOptions o;  // the mesh stage's settings (resolution and kernel: per case)
     int compare_points = 0;
   };
@@ -426,10 +426,11 @@ void AddBenchMesh(CLI::App* bench) {
         md += row;
         std::fprintf(stderr, "%s", row);
       }
-      if (rate.count("scalar") && rate.count("vector") && rate["scalar"] > 0) {
-        char line[128];
-        std::snprintf(line, sizeof line, "| %d^3 | | vector / scalar | | | | | | | | | %.2fx | |\n", r,
-                      rate["vector"] / rate["scalar"]);
+      for (const auto& [name, kernel_rate] : rate) {
+        if (name == "scalar" || !rate.count("scalar") || rate["scalar"] <= 0) continue;
+        char line[160];
+        std::snprintf(line, sizeof line, "| %d^3 | | %s / scalar | | | | | | | | | %.2fx | |\n", r, name.c_str(),
+                      kernel_rate / rate["scalar"]);
         md += line;
         std::fprintf(stderr, "%s", line);
       }

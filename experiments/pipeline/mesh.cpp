@@ -128,11 +128,13 @@ const Schema<MeshStageOptions>& MeshStageOptions::Settings() {
               [](MeshStageOptions& o, const std::string& v) { o.precision = ParsePrecision(v); })
           .Choice(
               "kernel", "--kernel",
-              "Iteration kernel in double precision: vector (SIMD, glibc libmvec), fused (SIMD, quijibo's own "
-              "log, atan2 and sincos) or scalar (the reference); other precisions are scalar",
+              "Iteration kernel in double precision: fused (SIMD, quijibo's own log, atan2 and sincos; the default), "
+              "vector (SIMD, glibc libmvec), float (float functions per factor) or scalar (the reference); other "
+              "precisions are scalar",
               [](auto& o) -> std::string& { return o.kernel; }, kJuliaKernelNames)
-          .Doc("iteration kernel in double: SIMD with libmvec (`vector`) or with quijibo's own functions "
-               "(`fused`, `quijibo/vector_math.h`), or the scalar reference ([meshing.md](meshing.md))")
+          .Doc("iteration kernel in double: SIMD with quijibo's own functions (`fused`, `quijibo/vector_math.h`; the "
+               "same meshes as `vector`, faster with AVX-512) or with libmvec (`vector`), float functions per factor "
+               "(`float`), or the scalar reference ([meshing.md](meshing.md))")
           .String("optimizer", "", "Which optimizer's map to mesh",
                   [](auto& o) -> std::string& { return o.optimizer; })
           .Doc("which optimized map to mesh (unset: the first optimizer's)");

@@ -26,7 +26,7 @@ struct MeshStageOptions {
   double iso = 0.0;              // the surface log|q_n| = iso
   std::string frame = "user";    // coordinates of the output: "user" (the input mesh's) or "fractal"
   Precision precision = Precision::kDouble;
-  std::string kernel = "vector";  // double precision: the vectorized kernel or the scalar reference (julia_batch.h)
+  std::string kernel = JuliaKernelName(kDefaultJuliaKernel);  // double precision (julia_batch.h)
   // The box in the fractal frame, xmin,ymin,zmin,xmax,ymax,zmax; empty: the whole normalized cube
   // (the map's box centre +- fractal_radius / 2).
   std::vector<double> box;

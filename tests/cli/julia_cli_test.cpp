@@ -185,10 +185,10 @@ TEST_F(JuliaCli, BadInputFailsWithOneLineAndNoOutput) {
   EXPECT_FALSE(Exists("a.ply") || Exists("a.stl") || Exists("a.png") || Exists("new"));
 }
 
-// --kernel: the vector and the scalar kernels write the same PLY; `bench mesh` runs both and
-// reports their throughput.
+// --kernel: the fused (default), vector and scalar kernels write the same PLY; `bench mesh` runs
+// them and reports their throughput.
 TEST_F(JuliaCli, KernelsGiveTheSameMeshAndBenchReportsBoth) {
-  for (const char* k : {"vector", "scalar"}) {
+  for (const char* k : {"vector", "scalar", "fused"}) {
     const CommandResult r = RunQuijibo("mesh " + Path("map.json") + " -o " + Path(std::string(k) + ".ply") +
                                        " -r 24 -n 2 --kernel " + k);
     ASSERT_EQ(r.code, 0) << r.out;
@@ -198,16 +198,20 @@ TEST_F(JuliaCli, KernelsGiveTheSameMeshAndBenchReportsBoth) {
   const std::string va((std::istreambuf_iterator<char>(a)), {}), sc((std::istreambuf_iterator<char>(b)), {});
   EXPECT_GT(va.size(), 1000u);
   EXPECT_EQ(va, sc);
+  std::ifstream f(Path("fused.ply"), std::ios::binary);
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(f)), {}), sc);
   EXPECT_NE(RunQuijibo("mesh " + Path("map.json") + " -o " + Path("x.ply") + " --kernel simd").code, 0);
 
   const CommandResult r = RunQuijibo("bench mesh " + Path("map.json") + " --resolutions 16 -n 2 --markdown " +
                                      Path("bench.md"));
   ASSERT_EQ(r.code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out.substr(r.out.find("{\n")));
-  ASSERT_EQ(j["results"].size(), 2u);
+  ASSERT_EQ(j["results"].size(), 3u);
   EXPECT_EQ(j["results"][0]["kernel"], "scalar");
   EXPECT_EQ(j["results"][1]["kernel"], "vector");
+  EXPECT_EQ(j["results"][2]["kernel"], "fused");
   EXPECT_EQ(j["results"][0]["triangles"], j["results"][1]["triangles"]);
+  EXPECT_EQ(j["results"][0]["triangles"], j["results"][2]["triangles"]);
   for (const auto& c : j["results"]) {
     EXPECT_GT(c["factor_evaluations_per_second"].get<double>(), 0) << c;
     EXPECT_GT(c["peak_rss_mb"].get<double>(), 0) << c;
