@@ -425,36 +425,39 @@ TilePlan PlanTiles(const BatchField& field, const MeshingOptions& o, const Point
   plan.sparse = o.sparse && stride >= o.block_cells;
   plan.search_stride = plan.sparse ? stride : 0;
 
-  // Active blocks (sorted ids), or all of them.
-  std::vector<std::int64_t> active_blocks;
+  // Active blocks, one bit each (sparse only).
+  Bitmap active;
   if (plan.sparse) {
-    NodeValues finest;
-    active_blocks = SearchBlocks(field, o, stride, geo, counters, search_evaluate, &finest);
+    SearchResult found = SearchBlocks(field, o, stride, geo, counters, search_evaluate);
+    active = std::move(found.active);
     if (o.follow_surface)
-      plan.blocks_followed = FollowSurface(field, o, geo, active_blocks, counters, search_evaluate, &finest);
+      plan.blocks_followed = FollowSurface(field, o, geo, active, counters, search_evaluate, &found.finest);
   }
   plan.follow_evaluations = counters.follow;
   plan.search_evaluations = counters.search + counters.follow;
   plan.search_non_finite = counters.non_finite;
 
-  // Tiles.
+  // Tiles, ascending, each with its active blocks ascending.
   const int T = o.tile_cells, per = T / o.block_cells;
   for (int a = 0; a < 3; ++a) plan.tiles[a] = (geo.lattice.cells[a] + T - 1) / T;
   if (plan.sparse) {
-    std::vector<std::pair<std::int64_t, std::int64_t>> tb;  // (tile, block)
-    tb.reserve(active_blocks.size());
-    for (std::int64_t id : active_blocks) {
-      const auto c = blocks.coords(id);
-      tb.push_back({(c[0] / per) + plan.tiles[0] * ((c[1] / per) + plan.tiles[1] * (c[2] / per)), id});
-    }
-    active_blocks = {};
-    std::sort(tb.begin(), tb.end());
-    for (const auto& [t, b] : tb) {
-      if (plan.tile_ids.empty() || plan.tile_ids.back() != t) {
-        plan.tile_ids.push_back(t);
-        plan.tile_blocks.emplace_back();
-      }
-      plan.tile_blocks.back().push_back(b);
+    std::vector<std::int64_t> ids;
+    for (std::int64_t t = 0; t < plan.tiles_total(); ++t) {
+      const std::int64_t tx = t % plan.tiles[0], ty = (t / plan.tiles[0]) % plan.tiles[1],
+                         tz = t / (plan.tiles[0] * plan.tiles[1]);
+      ids.clear();
+      for (std::int64_t k = tz * per; k < std::min<std::int64_t>((tz + 1) * per, blocks.count[2]); ++k)
+        for (std::int64_t j = ty * per; j < std::min<std::int64_t>((ty + 1) * per, blocks.count[1]); ++j) {
+          const std::int64_t row = blocks.id(0, j, k);
+          active.for_each(row + tx * per, row + std::min<std::int64_t>((tx + 1) * per, blocks.count[0]),
+                          [&](std::int64_t id) {
+                            ids.push_back(id);
+                            return true;
+                          });
+        }
+      if (ids.empty()) continue;
+      plan.tile_ids.push_back(t);
+      plan.tile_blocks.emplace_back(ids);
     }
   } else {
     plan.tile_ids.resize(std::size_t(plan.tiles_total()));

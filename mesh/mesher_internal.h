@@ -61,26 +61,77 @@ inline BlockGrid MakeBlocks(const MeshLattice& l, int stride) {
   return g;
 }
 
-// Node ids (sorted) and their field values.
-struct NodeValues {
-  std::vector<std::int64_t> keys;
-  std::vector<double> values;
+// A set of ids in [0, n), one bit each. The search's sets (candidate, crossing and kept blocks, the
+// finest corners' signs) grow as the box's volume: listed as 8-byte ids they passed 4 GB at 2048³
+// on a porous set (docs/benchmarks.md §26), as bits they take 128 MB per billion blocks.
+class Bitmap {
+ public:
+  explicit Bitmap(std::int64_t n = 0) : n_(n), words_(std::size_t((n + 63) / 64), 0) {}
+  std::int64_t size() const { return n_; }
+  void set(std::int64_t i) { words_[std::size_t(i >> 6)] |= std::uint64_t(1) << (i & 63); }
+  void reset(std::int64_t i) { words_[std::size_t(i >> 6)] &= ~(std::uint64_t(1) << (i & 63)); }
+  bool test(std::int64_t i) const { return (words_[std::size_t(i >> 6)] >> (i & 63)) & 1; }
+  std::int64_t count() const {
+    std::int64_t c = 0;
+    for (std::uint64_t w : words_) c += __builtin_popcountll(w);
+    return c;
+  }
+  bool any() const {
+    for (std::uint64_t w : words_)
+      if (w) return true;
+    return false;
+  }
+  void operator|=(const Bitmap& o) {
+    for (std::size_t i = 0; i < words_.size(); ++i) words_[i] |= o.words_[i];
+  }
+  // Calls f(id) for every set id in [begin, end), ascending; stops early when f returns false.
+  template <class F>
+  void for_each(std::int64_t begin, std::int64_t end, F&& f) const {
+    if (begin >= end) return;
+    for (std::int64_t w = begin >> 6, last = (end - 1) >> 6; w <= last; ++w) {
+      std::uint64_t bits = words_[std::size_t(w)];
+      if (w == (begin >> 6)) bits &= ~std::uint64_t(0) << (begin & 63);
+      if (w == last && (end & 63)) bits &= (std::uint64_t(1) << (end & 63)) - 1;
+      while (bits) {
+        const std::int64_t id = (w << 6) + __builtin_ctzll(bits);
+        bits &= bits - 1;
+        if (!f(id)) return;
+      }
+    }
+  }
+  const std::vector<std::uint64_t>& words() const { return words_; }
+
+ private:
+  std::int64_t n_;
+  std::vector<std::uint64_t> words_;
 };
 
-// The coarse-to-fine block search (block_search.cpp): the sorted ids of the blocks of
-// o.block_cells it keeps. `external` (optional) evaluates the search lattice instead of the field.
-// `finest` (optional) receives the values of the last level's nodes.
-std::vector<std::int64_t> SearchBlocks(const BatchField& field, const MeshingOptions& o, int first_stride,
-                                       const Geometry& geo, Counters& counters, const PointsEvaluator& external,
-                                       NodeValues* finest = nullptr);
+// The signs at the finest search level's block corners (a grid of count + 1 corners per axis; corner
+// c of axis a is node min(c block_cells, cells[a])): which were evaluated and which are inside.
+struct CornerSigns {
+  std::array<std::int64_t, 3> corners{0, 0, 0};
+  Bitmap known, inside;
+};
 
-// Surface following (block_search.cpp): adds to `active` (sorted block ids of o.block_cells) every
-// block across a face of an active block on which the field changes sign, until none is added, so
-// that every piece of surface the active blocks touch is meshed whole. Returns how many it added.
-// `known` (optional): node values already evaluated (the search's), not evaluated again.
-std::int64_t FollowSurface(const BatchField& field, const MeshingOptions& o, const Geometry& geo,
-                           std::vector<std::int64_t>& active, Counters& counters, const PointsEvaluator& external,
-                           const NodeValues* known = nullptr);
+// What the search keeps: the finest blocks (of o.block_cells) to mesh, one bit per block id.
+struct SearchResult {
+  Bitmap active;
+  CornerSigns finest;  // the finest level's corner signs (seeds surface following)
+};
+
+// The coarse-to-fine block search (block_search.cpp), a level at a time and, within a level, a slab
+// of corner layers at a time, so that besides its bitmaps it holds one slab's values and the previous
+// level's values (reused: every corner of a coarse block is a corner of its children). `external`
+// (optional) evaluates the search lattice instead of the field.
+SearchResult SearchBlocks(const BatchField& field, const MeshingOptions& o, int first_stride, const Geometry& geo,
+                          Counters& counters, const PointsEvaluator& external);
+
+// Surface following (block_search.cpp): adds to `active` every block across a face of an active block
+// on which the field changes sign, until none is added, so that every piece of surface the active
+// blocks touch is meshed whole. Returns how many it added. `seed` (optional): the search's corner
+// signs, not evaluated again. The frontier is taken in chunks, so its faces never all exist at once.
+std::int64_t FollowSurface(const BatchField& field, const MeshingOptions& o, const Geometry& geo, Bitmap& active,
+                           Counters& counters, const PointsEvaluator& external, const CornerSigns* seed = nullptr);
 
 // Removes the components that enclose a single lattice node (lattice_mesh.cpp); `edges[v]` is vertex
 // v's edge id. Returns how many.
