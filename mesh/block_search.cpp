@@ -13,11 +13,6 @@ namespace quijibo::mesh::mesher {
 
 namespace {
 
-// Nodes evaluated together: one slab of the search, one chunk of the following (about 100 MB of
-// points and values).
-constexpr std::int64_t kSlabNodes = std::int64_t(1) << 22;
-constexpr std::size_t kFollowChunkBlocks = std::size_t(1) << 17;
-
 // Evaluates `points` with the external evaluator or in parallel, counting into `counter`.
 void EvaluatePoints(const BatchField& field, const std::vector<Vec3>& points, std::vector<double>& values,
                     std::atomic<std::int64_t>& counter, Counters& counters, const PointsEvaluator& external) {
@@ -181,7 +176,7 @@ SearchResult SearchBlocks(const BatchField& field, const MeshingOptions& o, int 
     // Slabs of block layers [k0, k1), whose corners are the corner layers [k0, k1]; the last corner
     // layer is carried to the next slab, whose first layer it is, and stored once complete.
     const std::int64_t layer = cg.count[0] * cg.count[1];
-    const std::int64_t slab = std::max<std::int64_t>(1, kSlabNodes / layer - 1);
+    const std::int64_t slab = std::max<std::int64_t>(1, o.search_slab_nodes / layer - 1);
     Bitmap need, carry_need(layer);
     std::vector<double> value, carry_value = std::vector<double>(std::size_t(layer));
     std::vector<std::int64_t> fresh;
@@ -380,7 +375,7 @@ std::int64_t FollowSurface(const BatchField& field, const MeshingOptions& o, con
     };
     frontier.for_each(0, frontier.size(), [&](std::int64_t id) {
       chunk.push_back(id);
-      if (chunk.size() == kFollowChunkBlocks) check();
+      if (std::int64_t(chunk.size()) >= o.follow_chunk_blocks) check();
       return true;
     });
     if (!chunk.empty()) check();

@@ -366,6 +366,7 @@ std::string MeshingOptions::Validate() const {
     return "tile cells must be a multiple of block cells, at most 256";
   if (coarse_margin_cells < 0) return "coarse margin must be >= 0";
   if (search_min_cells < 1) return "search min cells must be >= 1";
+  if (search_slab_nodes < 1 || follow_chunk_blocks < 1) return "search slab nodes and follow chunk blocks must be >= 1";
   if (!std::isfinite(search_value_margin)) return "search value margin must be finite (negative: the field's)";
   double longest = 0;
   for (int a = 0; a < 3; ++a) longest = std::max(longest, max_corner[a] - min_corner[a]);

@@ -68,6 +68,11 @@ struct MeshingOptions {
   // Added by issue 16: sparse: mesh the block across every face of a meshed block that the surface
   // crosses, until none is left, so no piece of surface the search touched is cut open.
   bool follow_surface = true;
+  // Sparse: the search evaluates a slab of corner layers of about this many nodes at a time, and the
+  // surface following checks this many blocks at a time. They bound the working memory besides the
+  // search's bitmaps (docs/meshing.md "Memory") and never change the mesh or the evaluations.
+  std::int64_t search_slab_nodes = std::int64_t(1) << 22;
+  std::int64_t follow_chunk_blocks = std::int64_t(1) << 17;
   bool show_progress = false;         // Progress on stderr (util/progress.h)
   std::string Validate() const;       // empty when valid, else what is wrong
 };
