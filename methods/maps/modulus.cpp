@@ -36,6 +36,8 @@ MapKind MapKind_modulus() {
       if (fr.string_or(inner + "/kind", "") != "modulus")
         fr.fail(inner, "expected a shape modulus map {\"kind\": \"modulus\", ...} or a modulus stage's report "
                        "holding one (\"map\")");
+      // One level of indirection: a file naming a file could name itself.
+      if (fr.has(inner + "/file")) fr.fail(inner + "/file", "expected the map itself here, not another file");
       return ReadKindMap(fr, inner, file.parent_path().string());
     }
     const mesh::ModulusMap mm = mesh::ReadModulusMap(r, p, dir);

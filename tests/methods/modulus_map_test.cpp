@@ -161,6 +161,16 @@ TEST(ModulusMap, BadKeysNameTheirJsonPointer) {
   EXPECT_NE(message({{"kind", "modulus"}, {"target", "sphere"}, {"sdf_resolution", 4}}).find("/sdf_resolution"),
             std::string::npos);
   EXPECT_NE(message({{"kind", "modulus"}}).find("/target"), std::string::npos);
+  // A file holding a map names the map, not a file again (which could be itself).
+  const testing::TempDir dir;
+  dir.write("self.json", json{{"kind", "modulus"}, {"file", "self.json"}}.dump());
+  const std::string self =
+      testing::ThrownMessage([&] { ReadModulusDoc({{"kind", "modulus"}, {"file", "self.json"}}, dir.file("")); });
+  EXPECT_NE(self.find("self.json: /file: expected the map itself"), std::string::npos) << self;
+  dir.write("poly.json", json{{"kind", "polynomial"}, {"c", {0.0, 0.0}}}.dump());
+  EXPECT_NE(testing::ThrownMessage([&] { ReadModulusDoc({{"kind", "modulus"}, {"file", "poly.json"}}, dir.file("")); })
+                .find("expected a shape modulus map"),
+            std::string::npos);
 }
 
 }  // namespace
