@@ -47,6 +47,7 @@ KindMap ReadKindMap(const JsonReader& r, const std::string& p, const std::string
   KindMap m = kind->read(r, p, dir);
   m.kind = kind;
   if (m.half_extent <= 0) m.half_extent = kind->half_extent;
+  if (!m.iteration) m.iteration = kind->iteration;
   if (!m.base_set) {
     auto map = m.map;
     m.base_set = [map](const Quat& q) { return std::log(map->Apply(q).norm()); };
@@ -54,16 +55,36 @@ KindMap ReadKindMap(const JsonReader& r, const std::string& p, const std::string
   return m;
 }
 
+std::vector<double> KindMap::Region(bool two_d) const {
+  if (box) return box(two_d);
+  const Vec3& c = center;
+  const double h = half_extent;
+  return two_d ? std::vector<double>{c[0] - h, c[1] - h, c[0] + h, c[1] + h}
+               : std::vector<double>{c[0] - h, c[1] - h, c[2] - h, c[0] + h, c[1] + h, c[2] + h};
+}
+
+std::string MapObjectPointer(const nlohmann::json& doc) {
+  if (doc.is_object() && !doc.contains("kind") && doc.contains("map") && doc["map"].is_object()) return "/map";
+  return "";
+}
+
 nlohmann::json DescribeMapKinds() {
   nlohmann::json out = nlohmann::json::array();
-  for (const MapKind& k : MapKinds())
-    out.push_back({{"kind", k.name},
-                   {"help", k.help},
-                   {"keys", k.keys},
-                   {"iterations", k.iteration.iterations},
-                   {"escape", k.iteration.escape_radius},
-                   {"inside", k.iteration.bounded ? "bounded orbit" : "|q_n| < 1"},
-                   {"half_extent", k.half_extent}});
+  for (const MapKind& k : MapKinds()) {
+    nlohmann::json d = {{"kind", k.name}, {"help", k.help}, {"keys", k.keys}};
+    if (k.defaults_from_base) {
+      d["defaults"] = "the base map's";
+    } else {
+      d["iterations"] = k.iteration.iterations;
+      d["escape"] = k.iteration.escape_radius;
+      d["inside"] = k.iteration.bounded ? "bounded orbit" : "|q_n| < 1";
+      if (k.region.empty())
+        d["half_extent"] = k.half_extent;
+      else
+        d["region"] = k.region;
+    }
+    out.push_back(d);
+  }
   return out;
 }
 

@@ -146,6 +146,22 @@ std::vector<std::array<double, 2>> HexagramPolygon(double s) {
   return p;
 }
 
+std::vector<double> ModulusRegion(const ModulusTarget& target, bool two_d) {
+  double longest = 0;
+  for (int a = 0; a < (two_d ? 2 : 3); ++a) longest = std::max(longest, target.box_max[a] - target.box_min[a]);
+  if (two_d) {
+    const double half = 0.5 * longest * 1.3;
+    const double cx = 0.5 * (target.box_min[0] + target.box_max[0]), cy = 0.5 * (target.box_min[1] + target.box_max[1]);
+    return {cx - half, cy - half, cx + half, cy + half};
+  }
+  std::vector<double> box(6);
+  for (int a = 0; a < 3; ++a) {
+    box[a] = target.box_min[a] - 0.15 * longest;
+    box[3 + a] = target.box_max[a] + 0.15 * longest;
+  }
+  return box;
+}
+
 ModulusTarget AnalyticModulusTarget(const std::string& spec) {
   std::string name;
   auto params = ParseParams(spec, name);

@@ -56,6 +56,11 @@ struct ModulusTarget {
   int dimension = 3;
 };
 
+// The region the shape modulus is drawn over by default, as a --box: the target's box grown by 15 %
+// of its longest side on every side (3D: x0 y0 z0 x1 y1 z1), or the square about its centre of that
+// size (`two_d`: x0 y0 x1 y1, the longest side of x and y).
+std::vector<double> ModulusRegion(const ModulusTarget& target, bool two_d);
+
 // A fractal-frame SDF grid (as written by `quijibo sdf`) seen in the unit frame: u = k w with
 // k = kUnitFrameLongestSide / (fractal_radius (1 - 2 padding)), phi(u) = k * sdf(u / k), extended
 // beyond the grid by the distance to its box (ExtendedSample). The box is the grid's inside cells'

@@ -127,6 +127,14 @@ Portal PortalFromJson(const JsonReader& r, const std::string& p, const std::stri
   return portal;
 }
 
+std::vector<Portal> PortalsFromJson(const JsonReader& r, const std::string& p, const std::string& base_dir,
+                                    const MaskGridLoader& load) {
+  std::vector<Portal> portals;
+  const std::size_t n = r.has(p) ? r.array_size(p) : 0;
+  for (std::size_t i = 0; i < n; ++i) portals.push_back(PortalFromJson(r, p + "/" + std::to_string(i), base_dir, load));
+  return portals;
+}
+
 json PortalToJson(const Portal& p) {
   auto v = [](const Vec3& x) { return json::array({x[0], x[1], x[2]}); };
   const PortalTransform& t = p.transform;

@@ -83,6 +83,9 @@ class PortalMap : public QuaternionMap {
 Portal PortalFromJson(const JsonReader& r, const std::string& pointer, const std::string& base_dir,
                       const MaskGridLoader& load = {});
 nlohmann::json PortalToJson(const Portal& p);
+// The array of portals at `pointer` (absent: none), each as PortalFromJson reads it.
+std::vector<Portal> PortalsFromJson(const JsonReader& r, const std::string& pointer, const std::string& base_dir,
+                                    const MaskGridLoader& load = {});
 
 // The Koch snowflake of the 2024 paper (Figs. 4, 7, 8), worked out here: the hexagram H of
 // triangle side `side` (centroids at the origin) and one disc portal per star tip i, centred on

@@ -44,9 +44,9 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
     for (int a = 0; a < 3; ++a)
       s.target.box_min[a] = km.center[a] - km.half_extent, s.target.box_max[a] = km.center[a] + km.half_extent;
     s.target.dimension = int(r.number_or("/dimension", 3));
-    default_iterations = km.kind->iteration.iterations;
-    default_escape = km.kind->iteration.escape_radius;
-    s.bounded = km.kind->iteration.bounded;
+    default_iterations = km.iteration->iterations;
+    default_escape = km.iteration->escape_radius;
+    s.bounded = km.iteration->bounded;
   } else if (r.has("/map")) {
     if (r.has("/target")) r.fail("/map", "give either \"map\" (a QUIJIBO map) or \"target\", not both");
     auto rm = std::make_shared<RationalQuaternionMap>(ReadMap(rel(r.string("/map"))));
@@ -56,67 +56,14 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
     s.target.box_max = {1.5, 1.5, 1.5};
     s.target.dimension = int(r.number_or("/dimension", 3));
   } else {
-    const std::string t = r.string("/target");
-    LoadedTarget lt = LoadModulusTarget(IsMeshFile(t) || HasExtension(t, ".qgrid") ? rel(t) : t, sdf_resolution);
-    s.target = lt.target;
-    if (r.has("/dimension")) s.target.dimension = int(r.integer("/dimension"));
-    ShapeModulusOptions so;
-    if (r.has("/alpha")) so.alpha = ParameterFieldFromJson(r, "/alpha", dir, load_mask);
-    if (r.has("/beta")) so.beta = ParameterFieldFromJson(r, "/beta", dir, load_mask);
-    if (r.has("/origin_offset")) so.origin_offset = ReadVec3(r, "/origin_offset");
-    if (auto why = so.Validate(); !why.empty()) r.fail("", why);
-    Versor v;
-    if (r.has("/versor")) {
-      r.allow_keys("/versor", {"polynomial", "generate", "noise"});
-      if (r.has("/versor/polynomial")) {
-        v.polynomial = ReadVersorPolynomial(rel(r.string("/versor/polynomial")));
-      } else if (r.has("/versor/noise")) {
-        r.allow_keys("/versor/noise", {"frequency", "octaves", "seed"});
-        v.kind = Versor::Kind::kNoise;
-        v.noise.frequency = r.number_or("/versor/noise/frequency", 4.0);
-        v.noise.octaves = int(r.number_or("/versor/noise/octaves", 1));
-        v.noise.seed = std::uint64_t(r.number_or("/versor/noise/seed", 1));
-      } else {
-        const std::string g = "/versor/generate";
-        VersorGeneratorOptions go;
-        go.box_min = s.target.box_min;
-        go.box_max = s.target.box_max;
-        if (r.has(g)) {
-          r.allow_keys(g, {"roots", "min_power", "max_power", "integer_powers", "seed"});
-          go.roots = int(r.number_or(g + "/roots", go.roots));
-          go.min_power = r.number_or(g + "/min_power", go.min_power);
-          go.max_power = r.number_or(g + "/max_power", go.max_power);
-          go.integer_powers = r.boolean_or(g + "/integer_powers", true);
-          go.seed = std::uint64_t(r.number_or(g + "/seed", 1));
-        }
-        if (auto why = go.Validate(); !why.empty()) r.fail(g, why);
-        v.polynomial = GenerateVersorPolynomial(go);
-        s.poly = v.polynomial;
-      }
-    } else {
-      VersorGeneratorOptions go;
-      go.box_min = s.target.box_min;
-      go.box_max = s.target.box_max;
-      v.polynomial = GenerateVersorPolynomial(go);
-      s.poly = v.polynomial;
-    }
-    auto sm = std::make_shared<ShapeModulusMap>(s.target, v, so);
-    base = sm;
-    // The base set's signed function, in distance units: phi + beta (= log|f| / alpha).
-    auto beta = so.beta;
-    auto offset = so.origin_offset;
-    auto phi = s.target.phi;
-    base_set = [phi, beta, offset](const Quat& q) {
-      const Vec3 x{q.w - offset[0], q.x - offset[1], q.y - offset[2]};
-      return phi(x) + beta(x);
-    };
+    const ModulusMap mm = ReadModulusMap(r, "", dir, sdf_resolution);
+    s.target = mm.target.target;
+    if (mm.versor_generated) s.poly = mm.versor.polynomial;
+    base = mm.map;
+    base_set = mm.base_set;
   }
   s.two_d = s.target.dimension == 2;
-  std::vector<Portal> portals;
-  const std::size_t n = r.has("/portals") ? r.array_size("/portals") : 0;
-  for (std::size_t i = 0; i < n; ++i)
-    portals.push_back(PortalFromJson(r, "/portals/" + std::to_string(i), dir, load_mask));
-  s.map = std::make_shared<PortalMap>(base, std::move(portals), base_set);
+  s.map = std::make_shared<PortalMap>(base, PortalsFromJson(r, "/portals", dir, load_mask), base_set);
   s.iterations = int(r.number_or("/iterations", default_iterations));
   s.escape = r.number_or("/escape_radius", default_escape);
   if (r.has("/box")) {

@@ -90,13 +90,14 @@ std::unique_ptr<LevelEvaluator<Scalar>> MakeEvaluator(const RationalMap& map, co
 template <class Scalar>
 LevelObjective<Scalar>::LevelObjective(PassWeights& weights, const RationalMap& map, int resolution,
                                        LevelWeights level_weights, const std::string& evaluator,
-                                       const EnergyOptions& energy, const LogLinearOptions& loglinear)
+                                       const EnergyOptions& energy)
     : weights_(weights),
       resolution_(resolution),
       grid_(weights.Level(resolution, level_weights)),
       corners_(weights.between_nodes() ? weights.Corners(grid_) : EnergyGrid{}) {
   const bool loglinear_evaluator = std::is_same_v<Scalar, double> && (evaluator == "band" || evaluator == "dense");
   share_ = loglinear_evaluator && grid_.frame == weights.finest().frame;
+  const LogLinearOptions& loglinear = weights.loglinear();
   evaluator_ = MakeEvaluator<Scalar>(map, grid_, evaluator, energy, loglinear,
                                      share_ ? &weights.absolute_evaluator() : nullptr,
                                      share_ ? weights.absolute_blocks() : nullptr, level_energy_);

@@ -37,10 +37,10 @@ class LevelObjective {
  public:
   using Vector = Eigen::Matrix<Scalar, -1, 1>;
   // The level at `resolution` (as run) of the run whose finest grid and absolute energy are
-  // `weights`; `evaluator` is resolved (ResolveEvaluator); `loglinear` as PassWeights got it. At
+  // `weights`, whose log-linear options it takes; `evaluator` is resolved (ResolveEvaluator). At
   // the finest level a log-linear evaluator shares the absolute energy's matrix.
   LevelObjective(PassWeights& weights, const RationalMap& map, int resolution, LevelWeights level_weights,
-                 const std::string& evaluator, const EnergyOptions& energy, const LogLinearOptions& loglinear);
+                 const std::string& evaluator, const EnergyOptions& energy);
   ~LevelObjective();
   LevelObjective(const LevelObjective&) = delete;
   LevelObjective& operator=(const LevelObjective&) = delete;

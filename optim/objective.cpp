@@ -19,33 +19,19 @@ struct Objective::Impl {
 
 namespace {
 
-// Whether the corners are fitted and the run's loglinear options for `evaluator`, as Optimize sets
-// them up (optimizer.cpp); the target's wall depth is measured once.
-struct RunChoices {
-  bool between_nodes = false;
-  LogLinearOptions loglinear;
-};
-RunChoices MakeRunChoices(const OptimizeOptions& o, const std::string& evaluator, const ScalarGrid& target) {
-  RunChoices c;
-  c.between_nodes = ThinWallsOn(o.between_nodes, target);
-  c.loglinear = o.loglinear(evaluator, c.between_nodes);
-  return c;
-}
-
 template <class Scalar>
 struct ObjectiveIn : Objective::Impl {
   using Vector = Eigen::Matrix<Scalar, -1, 1>;
+  // As Optimize sets the run up (optimizer.cpp): whether the corners are fitted, the target's wall
+  // depth measured once.
   ObjectiveIn(const ScalarGrid& target, const RationalMap& map, const OptimizeOptions& o, int scheduled,
               const std::string& name)
-      : ObjectiveIn(target, map, o, scheduled, name, MakeRunChoices(o, name, target)) {}
-  ObjectiveIn(const ScalarGrid& target, const RationalMap& map, const OptimizeOptions& o, int scheduled,
-              const std::string& name, const RunChoices& run)
-      : weights(target, o.weights, map, o.energy, run.loglinear, run.between_nodes),
+      : weights(target, o.weights, map, o.energy, o.loglinear(name), ThinWallsOn(o.between_nodes, target)),
         level(weights, map,
               scheduled <= 0 ? 0
                              : ResolvedLevelResolution(target, weights.finest_weight(), o.weights, scheduled,
                                                        o.level_weights, o.min_level_fidelity),
-              o.level_weights, name, o.energy, run.loglinear) {
+              o.level_weights, name, o.energy) {
     resolution = level.resolution();
     evaluator = name;
     const Vector x = map.variables().cast<Scalar>();

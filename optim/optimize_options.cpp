@@ -35,11 +35,10 @@ Schedule OptimizeOptions::ScheduleFromNotation(const std::string& notation) cons
   return Schedule::Parse(notation, d.data());
 }
 
-LogLinearOptions OptimizeOptions::loglinear(const std::string& evaluator, bool between_nodes_on) const {
+LogLinearOptions OptimizeOptions::loglinear(const std::string& evaluator) const {
   LogLinearOptions l;
   l.storage = storage;
   l.memory_budget_bytes = memory_budget_gb * 1e9;
-  l.sharing = between_nodes_on ? 2 : 1;
   l.band = evaluator != "dense";
   return l;
 }

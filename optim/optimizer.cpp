@@ -164,8 +164,7 @@ class Runner {
     // Unless the passes evaluate densely, the log-linear evaluators are read through bands (the
     // absolute energy's too, where not stored), which need only the rows near the surface.
     st_.summary.between_nodes = ThinWallsOn(o_.between_nodes, sdf_);
-    loglinear_ = o_.loglinear(evaluator_, st_.summary.between_nodes);
-    weights_.emplace(sdf_, o_.weights, map_, o_.energy, loglinear_, st_.summary.between_nodes);
+    weights_.emplace(sdf_, o_.weights, map_, o_.energy, o_.loglinear(evaluator_), st_.summary.between_nodes);
     ResolveLevels();
     // The start's one-step IoU: map_ is the start map on a resume too (the checkpoint must match it).
     st_.summary.iou_start = weights_->TargetIou(map_.variables());
@@ -263,8 +262,7 @@ class Runner {
       s.fidelity = resolved.fidelity;
       Notify(s);
     }
-    LevelObjective<Scalar> objective(*weights_, map_, resolved.resolution, o_.level_weights, evaluator_, o_.energy,
-                                     loglinear_);
+    LevelObjective<Scalar> objective(*weights_, map_, resolved.resolution, o_.level_weights, evaluator_, o_.energy);
     for (int pj = first_pass; pj < int(level.passes.size()); ++pj) {
       if (StopBefore(li, pj)) break;
       if (pj == 0 && li > 0 && o_.level_start == OptimizeOptions::LevelStart::kBest &&
@@ -458,7 +456,6 @@ class Runner {
   ProgressLine progress_;
   std::optional<CheckpointWriter<Scalar>> checkpoints_;
   std::vector<IterationCallback*> observers_;
-  LogLinearOptions loglinear_;
   std::optional<PassWeights> weights_;
   bool abort_ = false;    // a callback asked to stop
   bool stopped_ = false;  // by a signal or a callback

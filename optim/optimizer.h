@@ -130,9 +130,9 @@ struct OptimizeOptions {
   // struct's caps and tolerance). Throws quijibo::Error naming the file or the notation's problem.
   Schedule ScheduleFromString(const std::string& notation_or_file, const std::filesystem::path& base) const;
   // The log-linear evaluators' options for a run with `evaluator` (read through a band unless
-  // "dense"): the storage, and the budget in bytes, shared by the nodes' and the corners'
-  // evaluators when `between_nodes_on`, so that fitting the corners takes no more memory.
-  LogLinearOptions loglinear(const std::string& evaluator = "band", bool between_nodes_on = false) const;
+  // "dense"): the storage and the budget in bytes (which PassWeights shares between the nodes' and
+  // the corners' evaluators when it fits between the nodes).
+  LogLinearOptions loglinear(const std::string& evaluator = "band") const;
   // Every setting, resolved: the schedule in its JSON form, enums by name. out_dir, resume and
   // callbacks are not settings and are left out.
   nlohmann::json ToJson() const;

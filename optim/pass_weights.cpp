@@ -5,17 +5,26 @@
 
 namespace quijibo::optim {
 
+namespace {
+// Fitting between the nodes doubles the evaluators of the same size, which then split the budget.
+LogLinearOptions Shared(LogLinearOptions l, bool between_nodes) {
+  if (between_nodes) l.sharing *= 2;
+  return l;
+}
+}  // namespace
+
 PassWeights::PassWeights(const ScalarGrid& sdf, WeightField field, const RationalMap& map,
                          const EnergyOptions& energy, const LogLinearOptions& loglinear, bool between_nodes)
     : sdf_(sdf),
       field_(field),
+      loglinear_(Shared(loglinear, between_nodes)),
       finest_w_(ComputeWeights(sdf, field)),
       finest_(MakeEnergyGrid(sdf, finest_w_, field, 0, LevelWeights::kSampleFinest, 0.0)),
-      absolute_(map, finest_, energy, loglinear) {
+      absolute_(map, finest_, energy, loglinear_) {
   if (absolute_.storage() == LogLinearOptions::Storage::kOnTheFly) absolute_band_ = std::make_unique<BandEnergy>(&absolute_);
   if (between_nodes) {
     finest_corners_ = CornerGrid(sdf, field, finest_);
-    corners_absolute_ = std::make_unique<LogLinearEnergy>(map, finest_corners_, energy, loglinear);
+    corners_absolute_ = std::make_unique<LogLinearEnergy>(map, finest_corners_, energy, loglinear_);
     if (corners_absolute_->storage() == LogLinearOptions::Storage::kOnTheFly)
       corners_band_ = std::make_unique<BandEnergy>(corners_absolute_.get());
   }

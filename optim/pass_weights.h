@@ -27,8 +27,13 @@ namespace quijibo::optim {
 class PassWeights {
  public:
   using SetWeights = std::function<void(const std::vector<double>& weight, double eta)>;
+  // `between_nodes`: the corner twins are fitted too, and the nodes' and the corners' evaluators
+  // (here and at every level) share `loglinear`'s budget (loglinear() has the sharing).
   PassWeights(const ScalarGrid& sdf, WeightField field, const RationalMap& map, const EnergyOptions& energy,
               const LogLinearOptions& loglinear, bool between_nodes = false);
+
+  // The log-linear options of every evaluator of the run (the budget shared when between_nodes()).
+  const LogLinearOptions& loglinear() const { return loglinear_; }
 
   const EnergyGrid& finest() const { return finest_; }
   const std::vector<double>& finest_weight() const { return finest_w_; }
@@ -73,6 +78,7 @@ class PassWeights {
  private:
   const ScalarGrid& sdf_;
   WeightField field_;
+  LogLinearOptions loglinear_;
   std::vector<double> finest_w_;
   double trivial_ = 0;
   EnergyGrid finest_;

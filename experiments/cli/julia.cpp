@@ -292,13 +292,10 @@ std::vector<std::vector<char>> KernelSetsAtRandomPoints(const RationalMap& input
                                                         const pipeline::MeshStageOptions& o,
                                                         const std::vector<KernelCase>& kernels, std::size_t count,
                                                         std::uint64_t seed) {
-  const RationalMap map = IterationMap(input_map, o.iteration_frame, o.detail);
-  const JuliaOptions julia = o.TranslatedJuliaOfIterated(map);
-  const double half = map.frame.fractal_radius / 2;
-  const Vec3 c = map.frame.box_center();
-  Vec3 lo{c[0] - half, c[1] - half, c[2] - half}, hi{c[0] + half, c[1] + half, c[2] + half};
-  if (o.box.size() == 6)
-    for (int a = 0; a < 3; ++a) lo[a] = o.box[a], hi[a] = o.box[3 + a];
+  const JuliaSetup setup = MakeJuliaSetup(input_map, o.Setup());
+  const RationalMap& map = setup.map;
+  const JuliaOptions& julia = setup.julia;
+  const Vec3 &lo = setup.box_min, &hi = setup.box_max;
   std::mt19937_64 rng(seed);
   std::vector<Vec3> points(count);
   for (Vec3& p : points)

@@ -9,6 +9,33 @@ namespace quijibo::pipeline {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
+namespace {
+
+// An inline map's files resolved against `base` (the experiment's folder), at any depth (a portals
+// map's base): a map object's "file", its "target" when that file exists (else an analytic shape),
+// versor polynomials and SDF masks.
+json ResolveMapFiles(json j, const fs::path& base) {
+  auto resolve = [&](const char* key) {
+    if (j.contains(key) && j[key].is_string()) j[key] = ResolvePath(base, j[key].get<std::string>());
+  };
+  if (j.is_object()) {
+    if (j.contains("kind")) {
+      resolve("file");
+      std::error_code ec;
+      if (j.contains("target") && j["target"].is_string() &&
+          fs::exists(ResolvePath(base, j["target"].get<std::string>()), ec))
+        resolve("target");
+    }
+    if (j.contains("type") && j["type"] == "sdf") resolve("file");
+    resolve("polynomial");
+  }
+  if (j.is_structured())
+    for (auto& x : j) x = ResolveMapFiles(x, base);
+  return j;
+}
+
+}  // namespace
+
 std::string JuliaSetStageOptions::Validate() const {
   if (map_file.empty() == map_inline.is_null()) return "give a map: a file or an object {\"kind\": ...}";
   return output.Validate();
@@ -22,9 +49,7 @@ JuliaSetStageOptions JuliaSetStageOptions::FromJson(const JsonReader& r, const s
   if (r.has(m) && r.at(m).is_string()) {
     o.map_file = ReadValue(r, m, SettingType::kPath, 0, 0, false, false, {}, {}, base, true);
   } else if (r.has(m) && r.at(m).is_object()) {
-    o.map_inline = r.at(m);
-    if (o.map_inline.contains("file") && o.map_inline["file"].is_string())
-      o.map_inline["file"] = ResolvePath(base, o.map_inline["file"].get<std::string>());
+    o.map_inline = ResolveMapFiles(r.at(m), base);
     ReadKindMap(r, m, base.string());  // errors now, with the experiment's pointer, not when run
   } else {
     r.fail(m, "expected a map object {\"kind\": ...} or a file holding one");
@@ -51,19 +76,16 @@ JuliaSetStageResult JuliaSet(const JuliaSetStageOptions& o) {
   if (std::string why = o.Validate(); !why.empty()) throw Error("julia: " + why);
   JuliaSetStageResult res;
   std::string source;
-  res.map = o.MapDocument(&source);
-  const KindMap km = ReadKindMap(JsonReader(res.map, source), "", fs::path(source).parent_path().string());
-  IterationOptions it = km.kind->iteration;
+  const json doc = o.MapDocument(&source);
+  const std::string pointer = MapObjectPointer(doc);  // a map object, or a stage's report holding one
+  const KindMap km = ReadKindMap(JsonReader(doc, source), pointer, fs::path(source).parent_path().string());
+  res.map = pointer.empty() ? doc : doc["map"];
+  IterationOptions it = *km.iteration;
   it.iterations = o.output.iterations.value_or(it.iterations);
   it.escape_radius = o.output.escape.value_or(it.escape_radius);
   const bool two_d = o.output.format == "png";
   ProductOutputOptions output = o.output;
-  if (!output.box) {
-    const Vec3& c = km.center;
-    const double h = km.half_extent;
-    output.box = two_d ? std::vector<double>{c[0] - h, c[1] - h, c[0] + h, c[1] + h}
-                       : std::vector<double>{c[0] - h, c[1] - h, c[2] - h, c[0] + h, c[1] + h, c[2] + h};
-  }
+  if (!output.box) output.box = km.Region(two_d);
   ModulusTarget region;  // Produce's default region is not used: the box is set
   res.product = Produce(km.map, output, it, region, two_d);
   res.product.report["inside"] = it.bounded ? "bounded orbit" : "|q_n| < 1";

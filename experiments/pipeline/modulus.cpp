@@ -135,6 +135,7 @@ ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions&
   ModulusStageResult res;
   res.versor = o.versor.Make(lt.target);  // roots in the target's own frame
   json authors = nullptr;
+  std::optional<AuthorsFrame> frame;
   if (!o.authors_frame.empty()) {
     if (two_d) throw Error("--authors-frame is for 3D targets");
     if (o.authors_frame.size() > 2) throw Error("--authors-frame: expected RES or RES,NODES");
@@ -143,7 +144,7 @@ ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions&
     if (o.authors_frame.size() > 1) af.nodes = o.authors_frame[1];
     af.unit_scale = lt.unit_per_source;
     if (auto why = af.Validate(); !why.empty()) throw Error("--authors-frame: " + why);
-    lt.target = InAuthorsFrame(lt.target, af);
+    frame = af;
     // alpha, beta (numbers or --params fields) were given as the authors' a and b.
     authors = {{"sdf_resolution", af.sdf_resolution},
                {"nodes", af.node_count()},
@@ -152,26 +153,30 @@ ModulusStageResult Modulus(const std::string& target, const ModulusStageOptions&
                {"their_beta", ParameterFieldToJson(so.beta)}};
     so = AuthorsParameters(so, af);
   }
-  auto map = std::make_shared<ShapeModulusMap>(lt.target, res.versor, so);
+  // The map as the map kind "modulus" makes it, which reads the report's "map" back to this map.
+  const mesh::ModulusMap mm = mesh::MakeModulusMap(std::move(lt), o.sdf_resolution, res.versor, so, frame);
+  res.map = mm.map;
+  const ModulusTarget& drawn = mm.target.target;
   IterationOptions jo;
   jo.iterations = o.output.iterations.value_or(jo.iterations);
   jo.escape_radius = o.output.escape.value_or(jo.escape_radius);
-  res.product = Produce(map, o.output, jo, lt.target, two_d);
+  res.product = Produce(mm.map, o.output, jo, drawn, two_d);
   // The iteration traps orbits at the origin: outside the shape, the set erodes or vanishes
   // (2023 Fig. 5; the torus's centre).
-  const double phi_origin = lt.target.phi({-so.origin_offset[0], -so.origin_offset[1], -so.origin_offset[2]});
+  const double phi_origin = drawn.phi({-so.origin_offset[0], -so.origin_offset[1], -so.origin_offset[2]});
   if (!(phi_origin < 0))
     std::fprintf(stderr,
                  "quijibo: warning: the iteration's origin lies outside the shape (phi %.3g there): the set erodes or "
                  "vanishes; move the shape over it (modulus.offset, --offset)\n",
                  phi_origin);
   res.report = {{"command", "modulus"},
-                {"target", lt.info},
+                {"target", mm.target.info},
                 {"output", out},
                 {"result", res.product.report},
                 {"alpha", ParameterFieldToJson(so.alpha)},
                 {"beta", ParameterFieldToJson(so.beta)},
-                {"origin", {{"phi", phi_origin}, {"inside", phi_origin < 0}}}};
+                {"origin", {{"phi", phi_origin}, {"inside", phi_origin < 0}}},
+                {"map", mesh::ModulusMapToJson(mm, o.params ? fs::path(*o.params).parent_path().string() : "")}};
   if (!authors.is_null()) res.report["authors_frame"] = authors;
   return res;
 }

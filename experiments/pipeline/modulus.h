@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -54,7 +55,10 @@ struct ModulusStageOptions {
 struct ModulusStageResult {
   Product product;
   Versor versor;
-  nlohmann::json report;  // the stage's report (modulus.json; `quijibo modulus` prints it)
+  std::shared_ptr<const QuaternionMap> map;  // as drawn
+  // The stage's report (modulus.json; `quijibo modulus` prints it); its "map" is the map object
+  // {"kind": "modulus", ...} that draws the same set (`quijibo julia modulus.json`).
+  nlohmann::json report;
 };
 
 // The shape modulus of `target` (a mesh, a .qgrid or an analytic shape: methods/modulus_target.h),

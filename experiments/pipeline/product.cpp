@@ -77,23 +77,13 @@ Product Produce(std::shared_ptr<const QuaternionMap> map, const ProductOutputOpt
                 const ModulusTarget& target, bool two_d) {
   if (auto why = jo.Validate(); !why.empty()) throw Error(why);
   if (auto why = o.Validate(); !why.empty()) throw Error("output: " + why);
-  const std::vector<double> box = o.box.value_or(std::vector<double>{});
+  const std::vector<double> box = o.box ? *o.box : ModulusRegion(target, two_d);
   Product p;
   const double t0 = WallSeconds(), c0 = CpuSeconds();
-  // Default region: the target's box grown by 15% of its longest side on every side.
-  double longest = 0;
-  for (int a = 0; a < (two_d ? 2 : 3); ++a) longest = std::max(longest, target.box_max[a] - target.box_min[a]);
   if (two_d) {
     View2D v = o.view;
-    if (!box.empty()) {
-      if (box.size() != 4) throw Error("--box needs 4 numbers in 2D (x0 y0 x1 y1)");
-      v.x_min = box[0], v.y_min = box[1], v.x_max = box[2], v.y_max = box[3];
-    } else {
-      const double half = 0.5 * longest * 1.3;
-      const double cx = 0.5 * (target.box_min[0] + target.box_max[0]),
-                   cy = 0.5 * (target.box_min[1] + target.box_max[1]);
-      v.x_min = cx - half, v.x_max = cx + half, v.y_min = cy - half, v.y_max = cy + half;
-    }
+    if (box.size() != 4) throw Error("--box needs 4 numbers in 2D (x0 y0 x1 y1)");
+    v.x_min = box[0], v.y_min = box[1], v.x_max = box[2], v.y_max = box[3];
     v.height = v.width;
     if (auto why = v.Validate(); !why.empty()) throw Error(why);
     const std::vector<double> field = SampleField2D(*map, jo, v);
@@ -104,16 +94,9 @@ Product Produce(std::shared_ptr<const QuaternionMap> map, const ProductOutputOpt
     p.report = {{"pixels", field.size()}, {"inside_pixels", inside}, {"view", {v.x_min, v.y_min, v.x_max, v.y_max}}};
   } else {
     mesh::MeshingOptions mo = o.meshing;
-    if (!box.empty()) {
-      if (box.size() != 6) throw Error("--box needs 6 numbers in 3D (x0 y0 z0 x1 y1 z1)");
-      mo.min_corner = {box[0], box[1], box[2]};
-      mo.max_corner = {box[3], box[4], box[5]};
-    } else {
-      for (int a = 0; a < 3; ++a) {
-        mo.min_corner[a] = target.box_min[a] - 0.15 * longest;
-        mo.max_corner[a] = target.box_max[a] + 0.15 * longest;
-      }
-    }
+    if (box.size() != 6) throw Error("--box needs 6 numbers in 3D (x0 y0 z0 x1 y1 z1)");
+    mo.min_corner = {box[0], box[1], box[2]};
+    mo.max_corner = {box[3], box[4], box[5]};
     if (auto why = mo.Validate(); !why.empty()) throw Error("meshing: " + why);
     mesh::MeshingSummary ms;
     p.mesh = mesh::MeshField(mesh::MakeQuaternionMapField(map, jo, 1.0), mo, &ms);
