@@ -1,5 +1,4 @@
 #include "mesh/fidelity.h"
-#include "quijibo/julia_setup.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,7 +20,6 @@ std::string FidelityOptions::Validate() const {
   if (surface_samples < 100 || surface_samples > 10000000) return "surface samples must be in [100, 1e7]";
   if (julia.iterations > 0)
     if (auto why = julia.Validate(); !why.empty()) return why;
-  if (!(detail >= 0 && detail <= 100)) return "detail must be in [0, 100]";
   if (closing < 0 || closing > 16) return "closing must be in [0, 16] cells";
   return {};
 }
@@ -125,6 +123,8 @@ double CellUniform(std::uint64_t seed, std::int64_t index, int axis) {
 
 Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& o) {
   if (auto why = o.Validate(); !why.empty()) throw Error("fidelity: " + why);
+  if (o.julia.iterations > 0 && !o.iterated)
+    throw Error("fidelity: the n-step set needs the map as iterated (its frame and detail applied: JuliaSetup::map)");
   const double b = map.frame.fractal_radius * (1.0 - 2.0 * map.frame.padding) / 2;  // half side of B
   const double half = b * (1.0 + 2.0 * o.extend);
   const int n = o.lattice;
@@ -137,11 +137,8 @@ Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const Fid
     return true;
   };
   std::unique_ptr<JuliaMap<double>> julia;
-  JuliaSetupOptions setup;
-  setup.frame = o.frame;
-  setup.detail = o.detail;
-  const RationalMap iterated = o.iterated ? *o.iterated : MakeJuliaSetup(map, setup).map;
-  if (o.julia.iterations > 0) julia = std::make_unique<JuliaMap<double>>(iterated, o.julia);
+  if (o.julia.iterations > 0) julia = std::make_unique<JuliaMap<double>>(*o.iterated, o.julia);
+  const RationalMap& iterated = o.julia.iterations > 0 ? *o.iterated : map;
   const std::int64_t count = std::int64_t(n) * n * n;
   std::vector<char> in_set(julia ? static_cast<std::size_t>(count) : 0), in_target(static_cast<std::size_t>(count));
   auto in_one_step = [&](const Vec3& p) {

@@ -16,8 +16,8 @@
 //   closed IoU IoU of the n-step set after a morphological closing (dilation then erosion by a cube
 //              of `closing` lattice cells' half side): whether the coarse shape, the silhouette,
 //              stays when the surface grows intricate (holes and folds finer than the closing fill)
-// The n-step set is of IterationMap(map, frame, detail) (the mesh stage's
-// `iteration_frame` and `detail`), sampled at the same user points.
+// The n-step set is of the map as iterated (`iterated`: the mesh stage's `iteration_frame` and
+// `detail` applied), sampled at the same user points.
 // Detail of a meshed set (MeasureMeshDetail): its area against the target mesh's, its connected
 // components, and a box-counting dimension: the boxes of side s = side / 2^k (k = 3 .. 7, side the
 // shape box's) that the surface meets, N(s), and the least-squares slope of log N against
@@ -43,10 +43,8 @@ struct FidelityOptions {
   int lattice = 72;             // nodes per axis, in [8, 512]
   double extend = 0.2;          // growth of B on every side, as a fraction of its side
   JuliaOptions julia;           // the n-step field (iterations 0: skip it)
-  IterationFrame frame = IterationFrame::kMap;  // the frame the n-step set is iterated in
-  double detail = kSmoothDetail;  // ... of the map with this detail (WithDetail)
-  // The map as iterated when the caller made it already (MakeJuliaSetup, quijibo/julia_setup.h):
-  // then frame and detail are its, not read here.
+  // The map as iterated (its frame and detail applied: JuliaSetup::map, made once by the caller,
+  // quijibo/julia_setup.h); needed for the n-step set, whose translation is `julia`'s.
   std::shared_ptr<const RationalMap> iterated;
   int closing = 2;              // closed IoU: half side of the closing's cube, lattice cells, in [0, 16]
   double iso = 0.0;
@@ -70,8 +68,9 @@ struct Fidelity {
   nlohmann::json ToJson() const;
 };
 
-// The lattice figures of `map` against the target grid `target` (both in the fractal frame).
-Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& options = {});
+// The lattice figures of `map` against the target grid `target` (both in the fractal frame). The
+// n-step figures (options.julia.iterations > 0) need options.iterated; throws quijibo::Error without.
+Fidelity MeasureSets(const RationalMap& map, const ScalarGrid& target, const FidelityOptions& options);
 
 // The one-step fit at the target grid's nodes and between them: the IoU of {L < 0} and {phi < 0}
 // at the cell centres of `target` (the points the energy fits) and at its interior cell corners

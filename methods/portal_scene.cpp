@@ -44,9 +44,9 @@ PortalScene SceneFromSpec(const json& doc, const std::string& source, int sdf_re
     for (int a = 0; a < 3; ++a)
       s.target.box_min[a] = km.center[a] - km.half_extent, s.target.box_max[a] = km.center[a] + km.half_extent;
     s.target.dimension = int(r.number_or("/dimension", 3));
+    s.iteration = *km.iteration;
     default_iterations = km.iteration->iterations;
     default_escape = km.iteration->escape_radius;
-    s.bounded = km.iteration->bounded;
   } else if (r.has("/map")) {
     if (r.has("/target")) r.fail("/map", "give either \"map\" (a QUIJIBO map) or \"target\", not both");
     auto rm = std::make_shared<RationalQuaternionMap>(ReadMap(rel(r.string("/map"))));

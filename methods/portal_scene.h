@@ -23,7 +23,9 @@ struct PortalScene {
   // The spec's output defaults: iterations, escape radius, box (4 or 6 numbers; empty: none).
   int iterations = 20;
   double escape = 20.0;
-  bool bounded = false;  // the inside convention of the base map's kind (IterationOptions::bounded)
+  // The base map kind's inside convention, starting offset and capture (its n and escape radius are
+  // `iterations` and `escape` above, which the spec may set).
+  IterationOptions iteration;
   std::vector<double> box;
 };
 

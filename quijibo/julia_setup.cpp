@@ -51,4 +51,18 @@ JuliaSetup MakeJuliaSetup(const RationalMap& input, const JuliaSetupOptions& o) 
   return s;
 }
 
+IteratedQuaternionMap MakeIteratedQuaternionMap(const RationalMap& input, const JuliaSetupOptions& o,
+                                                IterationOptions iteration) {
+  const JuliaSetup s = MakeJuliaSetup(input, o);
+  IteratedQuaternionMap m;
+  m.map = std::make_shared<const RationalQuaternionMap>(s.map, s.julia);
+  const Vec4& t = s.julia.root_translation;
+  iteration.offset = Quat(t[0], t[1], t[2], t[3]);
+  iteration.capture_radius = s.julia.capture_radius;
+  m.iteration = iteration;
+  m.center = s.map.frame.box_center();
+  m.half_extent = s.map.frame.fractal_radius / 2;
+  return m;
+}
+
 }  // namespace quijibo

@@ -8,11 +8,13 @@
 // normalized cube in the iteration frame) turned by `rotation` about the box's centre.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "quijibo/julia.h"
+#include "quijibo/quaternion_map.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo {
@@ -37,6 +39,20 @@ struct JuliaSetup {
 
 // Throws quijibo::Error on invalid options or when the translation by potential cannot be found.
 JuliaSetup MakeJuliaSetup(const RationalMap& map, const JuliaSetupOptions& options);
+
+// The same map for the generic engine (quaternion_map.h: IterateField, the map kinds): the
+// iterated map's roots translated, the samples' offset and the capture in `iteration`
+// (IterationOptions::offset, capture_radius; n and escape as given in `iteration`), and the
+// normalized cube of the iteration frame. Its field is the mesh stage's log|q_n| at every point.
+struct IteratedQuaternionMap {
+  std::shared_ptr<const RationalQuaternionMap> map;
+  IterationOptions iteration;
+  Vec3 center{0, 0, 0};      // the iteration frame's box centre
+  double half_extent = 0.0;  // fractal_radius / 2
+};
+// Throws quijibo::Error as MakeJuliaSetup does.
+IteratedQuaternionMap MakeIteratedQuaternionMap(const RationalMap& map, const JuliaSetupOptions& options,
+                                                IterationOptions iteration);
 
 // The root translation alone, on the map as iterated (`iterated`: IterationMap of the input map).
 Vec4 ResolveRootTranslation(const RationalMap& iterated, const JuliaSetupOptions& options);

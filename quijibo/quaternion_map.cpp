@@ -8,6 +8,8 @@ namespace quijibo {
 std::string IterationOptions::Validate() const {
   if (iterations < 1 || iterations > 100000) return "iterations must be in [1, 100000]";
   if (!(escape_radius > 0) || !std::isfinite(escape_radius)) return "escape radius must be a positive number";
+  if (!(capture_radius >= 0) || !(capture_radius < escape_radius)) return "capture radius must be in [0, escape radius)";
+  if (!std::isfinite(offset.norm2())) return "the starting points' offset must be finite";
   return {};
 }
 
@@ -68,6 +70,9 @@ Quat UnitPower(const Quat& d, double a) {
 }
 
 RationalQuaternionMap::RationalQuaternionMap(const RationalMap& map) : julia_(map, JuliaOptions{}) {}
+
+RationalQuaternionMap::RationalQuaternionMap(const RationalMap& map, const JuliaOptions& options)
+    : julia_(map, options) {}
 
 double RationalQuaternionMap::LogModulus(const Quat& q) const {
   double log_modulus = 0.0;

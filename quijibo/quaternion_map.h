@@ -2,7 +2,8 @@
 // the shape modulus (2023) and portals (2024) use, and QUIJIBO rational maps through an adapter
 // over JuliaMap (julia.h, which holds the rational map's log-polar iteration and its options).
 //
-//   q_0 = start;  while |q| < escape_radius and n < iterations: q <- F(q), n += 1
+//   q_0 = start + offset;  while |q| < escape_radius and n < iterations
+//                                and not (n > 0 and |q| < capture_radius): q <- F(q), n += 1
 //   field(start) = log|q_n|
 //
 // The surface is field = 0 (|q_n| = 1); inside is field < 0. This is the reference codes'
@@ -38,6 +39,13 @@ struct IterationOptions {
   // portals: the field log|q_n|); true, the orbit stays within the escape radius for n steps (the
   // filled Julia set of a polynomial such as q^2 + c: the field log|q_m| - log(escape radius)).
   bool bounded = false;
+  // Added to every starting point. A QUIJIBO map with a root translation t moves its samples with
+  // its roots (q_0 = p + t, julia.h), and the inside stays |q_n| < 1 in the translated coordinates,
+  // so the translation is not a change of variables of F and is carried here.
+  Quat offset{0.0, 0.0, 0.0, 0.0};
+  // An iterate (after the first step) with |q| below this stops and counts as inside: the
+  // reference's bail-out that keeps a translated map's deep inside in the set (JuliaOptions). 0: off.
+  double capture_radius = 0.0;
   std::string Validate() const;
 };
 
@@ -47,9 +55,11 @@ inline constexpr double kFieldClamp = 700.0;
 // receives n.
 inline double IterateField(const QuaternionMap& map, Quat q, const IterationOptions& o, int* used = nullptr) {
   const double escape2 = o.escape_radius * o.escape_radius;
+  const double capture2 = o.capture_radius * o.capture_radius;
+  q += o.offset;
   int n = 0;
   double r2 = q.norm2();
-  while (r2 < escape2 && n < o.iterations) {
+  while (r2 < escape2 && n < o.iterations && !(n > 0 && r2 < capture2)) {
     q = map.Apply(q);
     r2 = q.norm2();
     ++n;
@@ -68,6 +78,9 @@ inline double IterateField(const QuaternionMap& map, Quat q, const IterationOpti
 class RationalQuaternionMap : public QuaternionMap {
  public:
   explicit RationalQuaternionMap(const RationalMap& map);
+  // With `options`' root translation and scale (its roots moved; the samples' offset is the
+  // iteration's, IterationOptions::offset).
+  RationalQuaternionMap(const RationalMap& map, const JuliaOptions& options);
   Quat Apply(const Quat& q) const override;
   // log|R(q)| alone (the 2015 energy's L).
   double LogModulus(const Quat& q) const;

@@ -84,7 +84,7 @@ struct JuliaArgs {
   }
   // Translation and rotation into the options; the rotation's centre is the box's.
   void finish(const RationalMap& map, const Vec3& box_center) {
-    o.julia = o.TranslatedJulia(map);
+    o.julia = o.TranslatedJuliaOfIterated(map);  // no frame or detail keys: the map is iterated as given
     if (!rotate.empty()) {
       o.rotation = ParseNumbers(rotate, "--rotate");
       if (o.rotation.size() != 4) throw Error("--rotate: expected ax,ay,az,degrees");
@@ -147,8 +147,9 @@ void AddMesh(CLI::App& app, const pipeline::Mesher& mesher, const pipeline::Stre
     if (o.stream)  // the scratch files are made beside the outputs while meshing
       for (const std::string& p : {a->files.out, a->files.vdb})
         if (!p.empty()) CreateParentFolder(p);
-    const pipeline::MeshStageResult r =
-        o.stream ? pipeline::MeshJuliaStreamed(map, o, a->files, stream_mesher) : pipeline::MeshJulia(map, o, mesher);
+    const JuliaSetup setup = o.Iterated(map);
+    const pipeline::MeshStageResult r = o.stream ? pipeline::MeshJuliaStreamed(setup, o, a->files, stream_mesher)
+                                                 : pipeline::MeshJulia(setup, o, mesher);
     if (!r.writer) return;
     if (r.empty() && !a->allow_empty)
       throw Error(a->map + ": the surface log|q_n| = " + std::to_string(o.iso) +
@@ -286,13 +287,12 @@ KernelCase ParseKernelCase(const std::string& spec) {
 }
 
 // For each kernel, which of `count` seeded random points of the mesh stage's box are inside the set
-// {log|q_n| < iso} the stage meshes (its iterated map, translation and settings): the volume IoU
+// {log|q_n| < iso} the stage meshes (`setup`, its iterated map, and `o`'s settings): the volume IoU
 // of the kernels' sets without meshing.
-std::vector<std::vector<char>> KernelSetsAtRandomPoints(const RationalMap& input_map,
+std::vector<std::vector<char>> KernelSetsAtRandomPoints(const JuliaSetup& setup,
                                                         const pipeline::MeshStageOptions& o,
                                                         const std::vector<KernelCase>& kernels, std::size_t count,
                                                         std::uint64_t seed) {
-  const JuliaSetup setup = MakeJuliaSetup(input_map, o.Setup());
   const RationalMap& map = setup.map;
   const JuliaOptions& julia = setup.julia;
   const Vec3 &lo = setup.box_min, &hi = setup.box_max;
@@ -380,7 +380,9 @@ void AddBenchMesh(CLI::App* bench) {
             o.kernel = kc.kernel;
             // The child's own environment: the kernels it builds take this instruction set.
             if (kc.capped) ::setenv("QUIJIBO_VECTOR_ISA", VectorIsaName(kc.max_isa), 1);
-            const pipeline::MeshStageResult m = pipeline::MeshJulia(map, o);
+            // Made in the child: the parent runs no OpenMP region before it forks (libgomp's threads
+            // do not survive a fork), and a case is its own process.
+            const pipeline::MeshStageResult m = pipeline::MeshJulia(o.Iterated(map), o);
             const mesh::MeshingSummary& s = m.summary;
             const Vec4& t = m.julia.root_translation;
             return json({{"seconds", s.seconds}, {"vertices", s.vertices}, {"triangles", s.triangles},
@@ -435,7 +437,7 @@ void AddBenchMesh(CLI::App* bench) {
     json agreement = json::array();
     if (a->compare_points > 0 && kernels.size() > 1) {
       const std::vector<std::vector<char>> inside = KernelSetsAtRandomPoints(
-          map, a->o, kernels, std::size_t(a->compare_points), /*seed=*/1);
+          a->o.Iterated(map), a->o, kernels, std::size_t(a->compare_points), /*seed=*/1);
       for (std::size_t k = 1; k < kernels.size(); ++k) {
         std::int64_t both = 0, either = 0, differ = 0;
         for (std::size_t i = 0; i < inside[0].size(); ++i) {

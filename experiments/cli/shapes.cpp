@@ -50,12 +50,10 @@ json Measure(const FidelityArgs& a) {
   mesh::CheckSameFrame(map.frame, a.map, a.target);
   const ScalarGrid target = ReadGrid(a.target);
   mesh::FidelityOptions o = a.o;
-  o.frame = a.iteration.iteration_frame;
-  o.detail = a.iteration.detail;
   pipeline::MeshStageOptions iteration = a.iteration;
   iteration.julia = o.julia;
   iteration.julia.capture_radius = a.iteration.julia.capture_radius;
-  const auto setup = std::make_shared<JuliaSetup>(MakeJuliaSetup(map, iteration.Setup()));
+  const auto setup = std::make_shared<JuliaSetup>(iteration.Iterated(map));
   o.julia = setup->julia;
   o.iterated = std::shared_ptr<const RationalMap>(setup, &setup->map);
   mesh::Fidelity f = mesh::MeasureSets(map, target, o);
@@ -198,7 +196,13 @@ void MeasureRun(const ShapeBenchArgs& b, const Shape& sh, const fs::path& run, j
   row["initial"] = mesh::MeasureSets(initial, target, one).ToJson();
   if (!fs::exists(run / "optimized/map.json")) return;
   const RationalMap opt = ReadMap((run / "optimized/map.json").string());
-  mesh::Fidelity f = mesh::MeasureSets(opt, target, b.o);
+  mesh::FidelityOptions o = b.o;
+  if (o.julia.iterations > 0) {  // iterated as the run's mesh stage does by default (map frame, its detail)
+    pipeline::MeshStageOptions iteration;
+    iteration.julia = o.julia;
+    o.iterated = std::make_shared<const RationalMap>(iteration.Iterated(opt).map);
+  }
+  mesh::Fidelity f = mesh::MeasureSets(opt, target, o);
   json detail;
   if (fs::exists(run / "mesh/julia.ply")) {
     const mesh::TriangleMesh julia = mesh::ReadMesh((run / "mesh/julia.ply").string());

@@ -232,9 +232,9 @@ FilmSummary MakeFilm(const FilmOptions& o, const std::string& out, bool quiet) {
 
   // What the frames share: the iterated map and the framing.
   const bool fixed_map = o.vary == "translate_potential" || o.vary == "translation" || o.vary == "iterations";
-  JuliaSetupOptions frame_only = o.mesh.Setup();
+  MeshStageOptions frame_only = o.mesh;
   frame_only.translate.reset(), frame_only.translate_potential.reset();
-  const RationalMap iterated = MakeJuliaSetup(input, frame_only).map;
+  const RationalMap iterated = frame_only.Iterated(input).map;
   Vec3 direction{0.0, 0.0, 1.0};
   if (o.mesh.translate) direction = {(*o.mesh.translate)[0], (*o.mesh.translate)[1], (*o.mesh.translate)[2]};
   const double dn = std::hypot(direction[0], direction[1], direction[2]);
@@ -354,7 +354,7 @@ FilmSummary MakeFilm(const FilmOptions& o, const std::string& out, bool quiet) {
     f.value = v;
     MeshStageResult r;
     try {
-      r = MeshJulia(*map, mo);
+      r = MeshJulia(mo.Iterated(*map), mo);  // each frame is its own map or setting
     } catch (const Error& x) {
       // A frame the setting makes impossible (no translation reaches the potential) is drawn empty
       // and said so; the film goes on.

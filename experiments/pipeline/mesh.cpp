@@ -153,9 +153,9 @@ JuliaSetupOptions MeshStageOptions::Setup() const {
   return s;
 }
 
-JuliaOptions MeshStageOptions::TranslatedJulia(const RationalMap& input_map) const {
-  if (!translate_potential) return TranslatedJuliaOfIterated(input_map);  // the map is not looked at
-  return TranslatedJuliaOfIterated(MakeJuliaSetup(input_map, Setup()).map);
+JuliaSetup MeshStageOptions::Iterated(const RationalMap& input_map) const {
+  if (auto why = Validate(); !why.empty()) throw Error("mesh: " + why);
+  return MakeJuliaSetup(input_map, Setup());
 }
 
 JuliaOptions MeshStageOptions::TranslatedJuliaOfIterated(const RationalMap& iterated) const {
@@ -189,11 +189,6 @@ bool LocalMesher(const mesh::BatchField& field, const mesh::MeshingOptions& o, m
                  mesh::FieldBand* band, mesh::TriangleMesh* mesh, mesh::JuliaFieldStats*) {
   *mesh = mesh::MeshField(field, o, summary, band);
   return true;
-}
-
-MeshStageResult MeshJulia(const RationalMap& input_map, const MeshStageOptions& o, const Mesher& mesher) {
-  if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
-  return MeshJulia(MakeJuliaSetup(input_map, o.Setup()), o, mesher);
 }
 
 namespace {
@@ -236,12 +231,6 @@ std::optional<mesh::MeshStreamReport> LocalStreamMesher(const mesh::BatchField& 
                                                         const mesh::MeshStreamOptions& stream,
                                                         mesh::MeshingSummary* summary, mesh::JuliaFieldStats*) {
   return mesh::MeshFieldStreamed(field, o, stream, summary);
-}
-
-MeshStageResult MeshJuliaStreamed(const RationalMap& input_map, const MeshStageOptions& o, const MeshFiles& f,
-                                  const StreamMesher& mesher) {
-  if (auto why = o.Validate(); !why.empty()) throw Error("mesh: " + why);
-  return MeshJuliaStreamed(MakeJuliaSetup(input_map, o.Setup()), o, f, mesher);
 }
 
 MeshStageResult MeshJuliaStreamed(const JuliaSetup& setup, const MeshStageOptions& o, const MeshFiles& f,

@@ -41,11 +41,13 @@ struct MeshStageOptions {
   // How the map is iterated (the one conversion of these settings; MakeJuliaSetup makes the
   // iterated map from it): `julia`, iteration_frame, detail, translate(_potential), box, rotation.
   JuliaSetupOptions Setup() const;
-  // `julia` with its root translation: from `translate_potential` (on `input_map` as iterated: its
-  // `iteration_frame` and `detail`), else `translate` when set.
-  JuliaOptions TranslatedJulia(const RationalMap& input_map) const;
-  // The same when the caller holds the iterated map already (IterationMap of the input map with
-  // this `iteration_frame` and `detail`), so that it is not made twice.
+  // `input_map` as iterated with these settings (MakeJuliaSetup of Setup(); the translation by
+  // potential is a search): the one place outside quijibo/ where a face makes it. A run, a command,
+  // MPI and Python make it once and hand it to the mesh, the fidelity, the triptych and the bench.
+  // Throws quijibo::Error on invalid options.
+  JuliaSetup Iterated(const RationalMap& input_map) const;
+  // `julia` with its root translation on `iterated`, a map as it is iterated (its frame and detail
+  // applied): from `translate_potential`, else `translate` when set.
   JuliaOptions TranslatedJuliaOfIterated(const RationalMap& iterated) const;
   // The frame the map is iterated in: "map" (the frame it was optimized in) or "reference" (the
   // reference code's world frame, ReferenceFrame in rational_map.h, where the paper's translations
@@ -120,17 +122,13 @@ struct MeshStageResult {
   bool empty() const { return streamed ? summary.triangles == 0 : mesh.triangles.empty(); }
 };
 
-// Meshes `map`'s Julia set. Throws quijibo::Error on invalid options.
-MeshStageResult MeshJulia(const RationalMap& map, const MeshStageOptions& options, const Mesher& mesher = LocalMesher);
-// The same on the iterated map made already (MakeJuliaSetup(map, options.Setup())).
+// Meshes the Julia set of the iterated map `setup` (options.Iterated(map)). Throws quijibo::Error on
+// invalid options.
 MeshStageResult MeshJulia(const JuliaSetup& setup, const MeshStageOptions& options, const Mesher& mesher = LocalMesher);
 
-// Meshes `map`'s Julia set streamed to files.out (a .ply; no OBJ) and files.vdb (only the grid
+// Meshes the Julia set of `setup` streamed to files.out (a .ply; no OBJ) and files.vdb (only the grid
 // "field": the others are built from the whole mesh), written as the tiles finish; the PLY is the one
 // MeshJulia + WriteMeshFiles write, byte for byte. Throws quijibo::Error; nothing is left on failure.
-MeshStageResult MeshJuliaStreamed(const RationalMap& map, const MeshStageOptions& options, const MeshFiles& files,
-                                  const StreamMesher& mesher = LocalStreamMesher);
-// The same on the iterated map made already.
 MeshStageResult MeshJuliaStreamed(const JuliaSetup& setup, const MeshStageOptions& options, const MeshFiles& files,
                                   const StreamMesher& mesher = LocalStreamMesher);
 // Fails early (before meshing) when a path has the wrong extension or its folder does not exist.

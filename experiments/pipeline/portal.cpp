@@ -117,10 +117,9 @@ PortalStageResult Portal(const PortalStageOptions& o, const std::string& out) {
   mesh::PortalScene s = mesh::SceneFromSpec(res.spec, source, o.sdf_resolution);
   res.poly = s.poly;
   ProductOutputOptions output = o.output;
-  IterationOptions jo;
+  IterationOptions jo = s.iteration;
   jo.iterations = o.output.iterations.value_or(s.iterations);
   jo.escape_radius = o.output.escape.value_or(s.escape);
-  jo.bounded = s.bounded;
   if (!output.box && !s.box.empty()) output.box = s.box;
   if (!s.two_d && output.box && output.box->size() == 4) output.box.reset();
   if (s.two_d && !HasExtension(out, ".png")) throw Error("a 2D scene needs a .png output");

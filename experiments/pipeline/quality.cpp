@@ -24,8 +24,6 @@ json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const
   o.lattice = options.lattice;
   o.julia = julia;
   o.iso = iso;
-  o.detail = options.detail;
-  o.frame = options.frame;
   o.iterated = options.iterated;
   const mesh::Fidelity f = mesh::MeasureSets(chosen, target, o);
   json j = f.ToJson();

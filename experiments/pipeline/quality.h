@@ -33,10 +33,9 @@ struct QualityOptions {
   // are within 0.01 and 3 % of `quijibo fidelity`'s 72^3 figures (0.722 / 0.110 / 4.37 against
   // 0.712 / 0.113 / 4.24) for an eleventh of the work: seconds, not most of a minute.
   int lattice = 32;
-  // The n-step set as the mesh stage iterates it (its `detail` and `iteration_frame`).
-  double detail = kSmoothDetail;
-  IterationFrame frame = IterationFrame::kMap;
-  std::shared_ptr<const RationalMap> iterated;  // `chosen` as iterated, when made already (MakeJuliaSetup)
+  // `chosen` as the mesh stage iterates it (its `detail` and `iteration_frame` applied: the run's
+  // iterated map, MeshStageOptions::Iterated); needed when the n-step set is measured.
+  std::shared_ptr<const RationalMap> iterated;
 };
 
 // The measuring of `quijibo run`'s fidelity stage (fidelity/fidelity.json): the fidelity figures of

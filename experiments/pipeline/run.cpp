@@ -222,7 +222,7 @@ class Runner {
                         const std::string& map_path);
   void TriptychStage(const std::vector<std::string>& upstream, const std::string& map_path);
   void FidelityStage(const std::string& initial_hash, const std::string& chosen_hash, const std::string& map_path);
-  // The map at `map_path` as iterated with `options` (MakeJuliaSetup), made once per run: the mesh
+  // The map at `map_path` as iterated with `options` (MeshStageOptions::Iterated), made once per run: the mesh
   // stage, the fidelity stage and the triptych share it (the translation by potential is a search).
   std::shared_ptr<const JuliaSetup> IteratedMap(const std::string& map_path, const MeshStageOptions& options);
 
@@ -396,7 +396,7 @@ std::shared_ptr<const JuliaSetup> Runner::IteratedMap(const std::string& map_pat
   json key = options.ToJson();
   key["map"] = map_path;
   auto& made = iterated_[key.dump()];
-  if (!made) made = std::make_shared<const JuliaSetup>(MakeJuliaSetup(ReadMap(map_path), options.Setup()));
+  if (!made) made = std::make_shared<const JuliaSetup>(options.Iterated(ReadMap(map_path)));
   return made;
 }
 
@@ -452,12 +452,10 @@ void Runner::FidelityStage(const std::string& initial_hash, const std::string& c
   const std::shared_ptr<const JuliaSetup> setup = IteratedMap(map_path, e_.mesh);
   set.root_translation = setup->julia.root_translation;
   QualityOptions qo;
-  qo.detail = e_.mesh.detail;
-  qo.frame = e_.mesh.iteration_frame;
   qo.iterated = std::shared_ptr<const RationalMap>(setup, &setup->map);
   cache_.Run("fidelity", "fidelity",
              {{"julia", JuliaJson(set, e_.mesh.iso, Precision::kDouble)}, {"alpha", alpha},
-              {"lattice", qo.lattice}, {"detail", qo.detail}, {"iteration_frame", IterationFrameName(e_.mesh.iteration_frame)}},
+              {"lattice", qo.lattice}, {"detail", e_.mesh.detail}, {"iteration_frame", IterationFrameName(e_.mesh.iteration_frame)}},
              {}, {initial_hash, chosen_hash}, [&](const std::string& dir) {
                // The start check of the fits is in monopoles.json already (same map, grid and alpha
                // only when the energy's alpha is the guess's: else it is made again).
@@ -531,7 +529,9 @@ void Runner::Modulus() {
     ReferencedFiles(ParseJson(ReadFile(*m.params), *m.params), fs::path(*m.params).parent_path(), files);
   }
   const std::string out = "julia." + m.output.format;
-  const json inputs = {{"target", t.ToJson()}, {"modulus", m.ToJson()}};
+  // "report": modulus.json records the map it drew ("map", for `quijibo julia` and the kind
+  // `modulus`); a stage cached before it did is made again rather than reused without it.
+  const json inputs = {{"target", t.ToJson()}, {"modulus", m.ToJson()}, {"report", "with map"}};
   const std::string hash = cache_.Run("modulus", "modulus", inputs, files, {}, [&](const std::string& dir) {
     const ModulusStageResult r = pipeline::Modulus(spec, m, dir + "/" + out);
     WriteModulus(r, dir + "/" + out, m.versor.poly ? "" : dir + "/versor.json");

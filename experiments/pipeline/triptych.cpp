@@ -42,8 +42,6 @@ json SetFidelity(const RationalMap& map, const JuliaSetup& setup, const ScalarGr
   f.julia.slice = o.julia.slice;
   f.julia.root_translation = setup.julia.root_translation;
   f.iso = o.iso;
-  f.detail = o.detail;
-  f.frame = o.iteration_frame;
   f.iterated = std::make_shared<const RationalMap>(setup.map);
   json fid = mesh::MeasureSets(map, target, f).ToJson();
   fid["lattice"] = lattice;

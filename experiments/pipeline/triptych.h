@@ -27,7 +27,7 @@ MeshStageOptions IntricateDefaults(const MeshStageOptions& mesh);
 // IoU, leak), as fidelity.json holds them for the mesh stage's set. The run measures the intricate
 // surface on the Quality section's lattice (QualityOptions::lattice, 32), as the set is measured
 // there, so the two lines of figures compare.
-// `setup` is `map` as the intricate surface iterates it (MakeJuliaSetup(map, o.Setup())).
+// `setup` is `map` as the intricate surface iterates it (o.Iterated(map)).
 nlohmann::json SetFidelity(const RationalMap& map, const JuliaSetup& setup, const ScalarGrid& target,
                            const MeshStageOptions& o, int lattice);
 

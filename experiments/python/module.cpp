@@ -375,7 +375,7 @@ MeshResult Mesh(const RationalMap& map, int resolution, int iterations, bool all
   pipeline::MeshStageResult r;
   {
     py::gil_scoped_release release;
-    r = pipeline::MeshJulia(map, options, mesher);
+    r = pipeline::MeshJulia(options.Iterated(map), options, mesher);
   }
   interrupt.Rethrow();
   if (r.empty() && !allow_empty)

@@ -9,6 +9,7 @@
 #endif
 
 #include "mesh/mesh_fixtures.h"
+#include "quijibo/julia_setup.h"
 #include "util/error.h"
 #include "quijibo/target.h"
 
@@ -28,10 +29,18 @@ ScalarGrid SphereTarget(double radius) {
   return AnalyticTarget("sphere:radius=" + std::to_string(radius), TargetGridFrame(60, FractalFrame{}));
 }
 
+// `m` as iterated with `detail` in its own frame: the caller makes it (MakeJuliaSetup) and hands it on.
+std::shared_ptr<const RationalMap> Iterated(const RationalMap& m, double detail = kSmoothDetail) {
+  JuliaSetupOptions s;
+  s.detail = detail;
+  return std::make_shared<const RationalMap>(MakeJuliaSetup(m, s).map);
+}
+
 // The fidelity of Ball(radius) to the unit sphere, its n-step set after `iterations` (0: none).
 Fidelity BallFidelity(double radius, int iterations) {
   FidelityOptions o;
   o.julia.iterations = iterations;
+  if (iterations > 0) o.iterated = Iterated(Ball(radius));
   return MeasureSets(Ball(radius), SphereTarget(1.0), o);
 }
 
@@ -70,6 +79,7 @@ TEST(Fidelity, VolumeIoUIsFreeOfTheLatticesAliasing) {
   // hold the same 8 nodes, so their node IoU is 1; their volumes' IoU is (0.8 / 0.95)^3 = 0.60.
   FidelityOptions o;
   o.lattice = 8;
+  o.julia.iterations = 0;
   const Fidelity f = MeasureSets(Ball(0.8), SphereTarget(0.95), o);
   EXPECT_DOUBLE_EQ(f.one_step.iou, 1.0);
   EXPECT_LT(f.one_step.volume_iou, 0.85);
@@ -79,6 +89,7 @@ TEST(Fidelity, VolumeIoUIsFreeOfTheLatticesAliasing) {
 TEST(Fidelity, VolumeIoUDependsOnTheSeedNotOnTheThreads) {
   FidelityOptions o;
   o.lattice = 24;
+  o.julia.iterations = 0;
   const RationalMap m = Ball(0.8);
   const ScalarGrid t = SphereTarget(1.0);
   const double a = MeasureSets(m, t, o).one_step.volume_iou;
@@ -172,12 +183,14 @@ TEST(Fidelity, DetailKeepsTheOneStepSetAndChangesTheNStepSet) {
   o.lattice = 40;
   o.julia.iterations = 4;
   const ScalarGrid target = SphereTarget(1.0);
+  o.iterated = Iterated(m);
   const Fidelity base = MeasureSets(m, target, o);
-  o.detail = 20.0;
+  o.iterated = Iterated(m, 20.0);
   const Fidelity more = MeasureSets(m, target, o);
   EXPECT_EQ(more.one_step.set_nodes, base.one_step.set_nodes);
   EXPECT_NE(more.n_step.set_nodes, base.n_step.set_nodes);
-  o.detail = -1.0;
+  // The n-step set is measured on the map as iterated, which the caller makes once: none, an error.
+  o.iterated.reset();
   EXPECT_THROW(MeasureSets(m, target, o), Error);
 }
 

@@ -1,6 +1,8 @@
 // The Quality section's verdict on the optimization itself: the one-step IoU on the target grid
 // before and after (experiments/pipeline/quality.h).
 #include <gtest/gtest.h>
+
+#include "quijibo/julia_setup.h"
 #include <unistd.h>
 
 #include <filesystem>
@@ -11,6 +13,7 @@
 #include "monopole/kernel_fit.h"
 #include "quijibo/grid.h"
 #include "quijibo/iou.h"
+#include "quijibo/julia_setup.h"
 #include "quijibo/rational_map.h"
 
 namespace quijibo::pipeline {
@@ -93,6 +96,7 @@ TEST(Quality, MeasureQualityGivesTheChosenMapsIoUOnTheTargetGrid) {
   julia.iterations = 1;
   QualityOptions options;
   options.lattice = 16;
+  options.iterated = std::make_shared<const RationalMap>(MakeJuliaSetup(Ball(1.3), JuliaSetupOptions{}).map);
   const json j = MeasureQuality(Ball(1.0), Ball(1.3), sphere, julia, 0.0, 10.0, nullptr, options);
   const double start = j["target_grid"]["start_iou"], optimized = j["target_grid"]["iou"];
   EXPECT_EQ(start, monopole::CheckStart(Ball(1.0), sphere).iou);
