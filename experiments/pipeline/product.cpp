@@ -51,12 +51,12 @@ const Schema<ProductOutputOptions>& ProductOutputOptions::Settings() {
           .Integer(
               "png_size", "--png-size", "2D: pixels per side", [](auto& o) -> int& { return o.view.width; }, 8, 32768)
           .Integer(
-              "iterations", "--iterations", "Map applications",
+              "iterations", "--iterations", "Map applications (unset: the map kind's or the spec's; the shape modulus: 3)",
               [](auto& o) -> std::optional<int>& { return o.iterations; }, 1, 100000)
           .Fallback([](const O&) { return IterationOptions{}.iterations; })
           .Number(
-              "escape", "--escape", "Escape radius", [](auto& o) -> std::optional<double>& { return o.escape; }, 0.0,
-              1e300, true)
+              "escape", "--escape", "Escape radius (unset: the map kind's or the spec's; the shape modulus: 20)",
+              [](auto& o) -> std::optional<double>& { return o.escape; }, 0.0, 1e300, true)
           .Fallback([](const O&) { return IterationOptions{}.escape_radius; })
           .Numbers(
               "box", "--box", "Region: x0 y0 x1 y1 (2D) or x0 y0 z0 x1 y1 z1 (3D), unit frame",
