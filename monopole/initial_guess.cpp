@@ -16,7 +16,37 @@ std::string InitialGuessOptions::Validate() const {
       !why.empty())
     return why;
   if (!(alpha > 0)) return "alpha must be > 0";
+  if (auto why = CheckRange("hollow_roots", SettingType::kInteger, hollow_roots, kHollowRootsRange); !why.empty())
+    return why;
+  if (auto why = CheckRange("hollow_offset_cells", SettingType::kNumber, hollow_offset_cells, kHollowOffsetRange);
+      !why.empty())
+    return why;
   return {};
+}
+
+int AddHollowRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
+                   const InitialGuessOptions& o) {
+  if (auto why = o.Validate(); !why.empty()) throw Error("initial guess: " + why);
+  const double h = sdf.frame.spacing;
+  int added = 0;
+  for (const Vec3& p : surface) {
+    if (added >= o.hollow_roots) break;
+    Vec3 n;
+    for (int a = 0; a < 3; ++a) {
+      Vec3 lo = p, hi = p;
+      lo[a] -= h, hi[a] += h;
+      n[a] = sdf.sample(hi) - sdf.sample(lo);
+    }
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0) || !std::isfinite(len)) continue;
+    const Vec3 q{p[0] + o.hollow_offset_cells * h * n[0] / len, p[1] + o.hollow_offset_cells * h * n[1] / len,
+                 p[2] + o.hollow_offset_cells * h * n[2] / len};
+    if (!(sdf.sample(q) > 0) || !(OneStepLogModulus(map, q) < 0)) continue;
+    map.bottom_roots.push_back({q[0], q[1], q[2], 0.0});
+    map.bottom_exponents.push_back(0.0);
+    ++added;
+  }
+  return added;
 }
 
 LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, double alpha) {
@@ -133,12 +163,13 @@ RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFram
   for (const Monopole& p : monopoles) {
     const double w = p.weight / frame.fractal_radius * o.amplitude;
     const Vec4 root{p.position[0], p.position[1], p.position[2], 0.0};
-    if (w > 0) {
+    if (w > 0 || (o.both_signs && w < 0)) {
       m.top_roots.push_back(root);
-      m.top_exponents.push_back(w);
-    } else if (w < 0) {
+      m.top_exponents.push_back(std::max(w, 0.0));
+    }
+    if (w < 0 || (o.both_signs && w > 0)) {
       m.bottom_roots.push_back(root);
-      m.bottom_exponents.push_back(-w);
+      m.bottom_exponents.push_back(std::max(-w, 0.0));
     }
   }
   if (o.scan == StartScan::kReference) {
@@ -159,8 +190,10 @@ RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFram
     f.bottom_roots.erase(f.bottom_roots.begin());
     f.bottom_exponents.erase(f.bottom_exponents.begin());
     double smallest = std::numeric_limits<double>::infinity();
-    for (double e : f.top_exponents) smallest = std::min(smallest, e);
-    for (double e : f.bottom_exponents) smallest = std::min(smallest, e);
+    for (double e : f.top_exponents)
+      if (e > 0) smallest = std::min(smallest, e);
+    for (double e : f.bottom_exponents)
+      if (e > 0) smallest = std::min(smallest, e);
     f.top_roots.insert(f.top_roots.begin(), Vec4{0, 0, 0, 0});
     f.top_exponents.insert(f.top_exponents.begin(), std::isfinite(smallest) ? smallest : 1.0);
   }

@@ -50,6 +50,20 @@ struct InitialGuessOptions {
   static constexpr ValueRange kScanResolutionRange{4, 512};
   double alpha = 10.0;
   StartScan scan = StartScan::kIou;
+  // Every monopole becomes a top and a bottom root, the second at exponent 0, so the bounded
+  // optimizer (exponents >= 0) can turn a monopole's sign. The P fit's charges are all but all
+  // positive (a conductor's), and top roots alone cannot carve a concavity; the paper's bottom roots
+  // "hollow out" the concave regions (docs/fidelity.md §12).
+  bool both_signs = true;
+  // Bottom roots (exponent 0) where the start's set spills out of the shape: at most this many
+  // surface points whose outward point `hollow_offset_cells` away is inside the start's set {L < 0}
+  // get a bottom root there. The P fit's monopoles sit where a conductor's charge is, on convex parts;
+  // a concavity the start fills has none near it, and the paper's bottom roots that "hollow out"
+  // the concave regions need to be there for the optimizer to grow (docs/fidelity.md §12).
+  int hollow_roots = 200;
+  static constexpr ValueRange kHollowRootsRange{0, 4000};
+  double hollow_offset_cells = 2.0;
+  static constexpr ValueRange kHollowOffsetRange{0.0, 20.0};
   std::string Validate() const;
 };
 
@@ -72,6 +86,14 @@ LnCScan ScanLevelByIou(const RationalMap& map, const ScalarGrid& sdf, double alp
 RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFrame& frame,
                        const ScalarGrid& sdf, const InitialGuessOptions& options = {},
                        LnCScan* scan = nullptr);
+
+// Adds `options.hollow_roots` bottom roots of exponent 0 to `map` (the start, in the frame of `sdf`):
+// taken in the given order from `surface` (points on the target surface, blue noise in a random
+// order), those whose point p + d n, d = hollow_offset_cells * sdf spacing along the outward normal
+// n (the sdf's gradient), is outside the shape (sdf > 0) and inside the start's set
+// (OneStepLogModulus < 0); the root goes at that outward point. Returns how many were added.
+int AddHollowRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
+                   const InitialGuessOptions& options);
 
 // The reference's 1-D scan for ln C of `map` (its exponents, tau = beta = 1 as given).
 LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, double alpha);

@@ -9,6 +9,7 @@
 #include "experiments/pipeline/initial_pictures.h"
 #include "experiments/pipeline/product.h"
 #include "mesh/frame_file.h"
+#include "monopole/sampling.h"
 #include "quijibo/energy.h"
 #include "util/error.h"
 #include "util/io.h"
@@ -154,6 +155,25 @@ void AddMonopoleSettings(Schema<O>& s) {
       .Doc("monopoles: a root at the origin: with `scan` `reference` the reference's leading zero roots (a top and a "
            "bottom root, exponent 1, which cancel only while tau = beta); with `scan` `iou` one top root, its exponent "
            "the smallest monopole's, so the origin stays a zero of R (`--no-zero-roots` leaves it out)")
+      .When(Kind({"monopoles"}))
+      .Boolean("both_signs", "--no-both-signs",
+               "monopoles: every monopole a top and a bottom root (the other at exponent 0), so the optimizer can "
+               "turn its sign (`--no-both-signs`: one root per monopole, by the sign of its charge)",
+               [](auto& o) -> bool& { return o.guess.both_signs; })
+      .When(Kind({"monopoles"}))
+      .Integer(
+          "hollow_roots", "--hollow-roots",
+          "monopoles: at most this many bottom roots (exponent 0) where the start's set spills out of the shape",
+          [](auto& o) -> int& { return o.guess.hollow_roots; }, monopole::InitialGuessOptions::kHollowRootsRange)
+      .Doc("monopoles: bottom roots of exponent 0 at up to this many points `hollow_offset` cells outside the "
+           "surface where the start's set {L < 0} reaches (blue-noise surface samples in a seeded order), so the "
+           "optimizer can hollow out the concave regions the P fit's monopoles leave filled "
+           "([fidelity.md](fidelity.md) §12)")
+      .When(Kind({"monopoles"}))
+      .Number(
+          "hollow_offset", "--hollow-offset", "monopoles: distance of a hollow root outside the surface, in cells",
+          [](auto& o) -> double& { return o.guess.hollow_offset_cells; },
+          monopole::InitialGuessOptions::kHollowOffsetRange)
       .When(Kind({"monopoles"}))
       .Enum(
           "scan", "--start-scan",
@@ -352,6 +372,13 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
   const auto t1 = std::chrono::steady_clock::now();
   monopole::LnCScan scan;
   RationalMap map = monopole::InitialMap(mono.monopoles, target.frame, target.grid, o.guess, &scan);
+  int hollow = 0;
+  if (o.guess.hollow_roots > 0) {
+    monopole::SamplingOptions so = mo.sampling;
+    so.count = std::max(2000, 10 * o.guess.hollow_roots);
+    hollow = monopole::AddHollowRoots(
+        map, target.grid, monopole::PoissonDiskSample(target.mesh.vertices, target.mesh.triangles, so), o.guess);
+  }
   scan_seconds = Since(t1);
   map.provenance = {{"made_by", "quijibo monopoles"},
                     {"initializer", "monopoles"},
@@ -364,6 +391,8 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
                     {"sampling_seed", mo.sampling.seed},
                     {"amplitude", o.guess.amplitude},
                     {"scan", monopole::StartScanName(o.guess.scan)},
+                    {"both_signs", o.guess.both_signs},
+                    {"hollow_roots", hollow},
                     {"steepness", scan.steepness},
                     {"relative_residual", mono.fit.final_relative_residual},
                     {"monopoles", mono.monopoles.size()}};

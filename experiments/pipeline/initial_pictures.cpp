@@ -23,8 +23,11 @@ void WriteRootsPly(const std::string& path, const RationalMap& map, bool user_fr
     body.append(reinterpret_cast<const char*>(rgb), 3);
     ++count;
   };
-  for (int i = 0; i < map.top_count(); ++i) add(map.top_roots[i], 30, 230);
-  for (int i = 0; i < map.bottom_count(); ++i) add(map.bottom_roots[i], 230, 30);
+  // A root of exponent 0 (a `both_signs` twin) is not a factor of R: not written.
+  for (int i = 0; i < map.top_count(); ++i)
+    if (map.top_exponents[i] != 0) add(map.top_roots[i], 30, 230);
+  for (int i = 0; i < map.bottom_count(); ++i)
+    if (map.bottom_exponents[i] != 0) add(map.bottom_roots[i], 230, 30);
   const std::string header =
       "ply\nformat binary_little_endian 1.0\ncomment quijibo roots: blue top, red bottom\n"
       "element vertex " +
@@ -74,8 +77,10 @@ Image PotentialSlice(const monopole::ExteriorPotential& potential, const ScalarG
     if (std::abs(r[2]) > slab) return;
     img.disc((r[0] - lo[0]) / side * size, size - (r[1] - lo[1]) / side * size, std::max(2.0, size / 150.0), c);
   };
-  for (const Vec4& r : map.top_roots) draw(r, {30, 80, 255});
-  for (const Vec4& r : map.bottom_roots) draw(r, {255, 40, 30});
+  for (int i = 0; i < map.top_count(); ++i)
+    if (map.top_exponents[i] != 0) draw(map.top_roots[i], {30, 80, 255});
+  for (int i = 0; i < map.bottom_count(); ++i)
+    if (map.bottom_exponents[i] != 0) draw(map.bottom_roots[i], {255, 40, 30});
   return img;
 }
 
@@ -97,8 +102,10 @@ Image StartSlice(const ScalarGrid& sdf, const RationalMap& map, int size) {
     if (std::abs(r[2]) > slab) return;
     img.disc((r[0] - lo[0]) / side * size, size - (r[1] - lo[1]) / side * size, std::max(1.5, size / 250.0), c);
   };
-  for (const Vec4& r : map.top_roots) draw(r, {30, 80, 255});
-  for (const Vec4& r : map.bottom_roots) draw(r, {255, 40, 30});
+  for (int i = 0; i < map.top_count(); ++i)
+    if (map.top_exponents[i] != 0) draw(map.top_roots[i], {30, 80, 255});
+  for (int i = 0; i < map.bottom_count(); ++i)
+    if (map.bottom_exponents[i] != 0) draw(map.bottom_roots[i], {255, 40, 30});
   return img;
 }
 

@@ -21,6 +21,7 @@ TEST(InitialGuess, SplitsWeightsIntoTopAndBottomRootsWithTheAmplitude) {
   frame.fractal_radius = 4.0;
   const std::vector<Monopole> monopoles = {{{0.5, 0.0, 0.0}, 0.2}, {{-0.5, 0.1, 0.0}, -0.1}, {{0.0, 0.5, 0.2}, 0.05}};
   InitialGuessOptions o;
+  o.both_signs = false;  // one root per monopole, by its sign
   o.amplitude = 40.0;
   // The IoU scan (the default): one top root at the origin instead of the zero roots, every exponent
   // scaled by the same steepness (the monopoles' ratios kept), no bottom root at the origin.
@@ -53,6 +54,71 @@ TEST(InitialGuess, SplitsWeightsIntoTopAndBottomRootsWithTheAmplitude) {
   m = InitialMap(monopoles, frame, Sphere(1.0), o);
   EXPECT_EQ(m.top_count(), 2);
   EXPECT_EQ(m.bottom_count(), 1);
+}
+
+// both_signs: each monopole also in the other polynomial at exponent 0, so the start's field, its
+// level and its steepness are those without; only the optimizer's freedom grows.
+TEST(InitialGuess, BothSignsAddsZeroTwinsAndKeepsTheStart) {
+  FractalFrame frame;
+  frame.fractal_radius = 4.0;
+  const std::vector<Monopole> monopoles = {{{0.5, 0.0, 0.0}, 0.2}, {{-0.5, 0.1, 0.0}, -0.1}, {{0.0, 0.5, 0.2}, 0.05}};
+  InitialGuessOptions o;
+  o.both_signs = false;
+  const RationalMap plain = InitialMap(monopoles, frame, Sphere(1.0), o);
+  o.both_signs = true;
+  const RationalMap both = InitialMap(monopoles, frame, Sphere(1.0), o);
+  ASSERT_EQ(both.top_count(), 4);     // the origin and the three monopoles
+  ASSERT_EQ(both.bottom_count(), 3);  // the three monopoles
+  EXPECT_EQ(both.ln_C, plain.ln_C);
+  EXPECT_EQ(both.top_exponents[0], plain.top_exponents[0]);  // the origin: the smallest nonzero
+  EXPECT_EQ(both.top_exponents[1], plain.top_exponents[1]);
+  EXPECT_EQ(both.top_exponents[2], 0.0);  // the bottom monopole's twin
+  EXPECT_EQ(both.top_roots[2], (Vec4{-0.5, 0.1, 0.0, 0.0}));
+  EXPECT_EQ(both.top_exponents[3], plain.top_exponents[2]);
+  EXPECT_EQ(both.bottom_exponents[0], 0.0);
+  EXPECT_EQ(both.bottom_exponents[1], plain.bottom_exponents[0]);
+  EXPECT_EQ(both.bottom_exponents[2], 0.0);
+  EXPECT_EQ(both.bottom_roots[2], (Vec4{0.0, 0.5, 0.2, 0.0}));
+}
+
+// Hollow roots go where the start's set reaches outside the shape, hollow_offset_cells outside the
+// surface, at exponent 0 (the start's field unchanged), at most hollow_roots of them.
+TEST(InitialGuess, HollowRootsGoWhereTheSetSpillsOutOfTheShape) {
+  const ScalarGrid sdf = Sphere(1.0);
+  const double h = sdf.frame.spacing;
+  std::vector<Vec3> surface;
+  for (int i = 0; i < 40; ++i) {
+    const double t = 0.3 + 0.07 * i, u = 0.9 * i;
+    surface.push_back({std::sin(t) * std::cos(u), std::sin(t) * std::sin(u), std::cos(t)});
+  }
+  auto ball = [](double radius) {  // the set {L < 0} is the ball |q| < radius
+    RationalMap m;
+    m.top_roots = {{0, 0, 0, 0}};
+    m.top_exponents = {1.0};
+    m.ln_C = -std::log(radius);
+    return m;
+  };
+  InitialGuessOptions o;
+  o.hollow_roots = 25;
+  RationalMap fat = ball(1.5);  // reaches 2 cells (0.167) outside the unit sphere
+  const RationalMap before = fat;
+  EXPECT_EQ(AddHollowRoots(fat, sdf, surface, o), 25);
+  ASSERT_EQ(fat.bottom_count(), 25);
+  for (int i = 0; i < 25; ++i) {
+    EXPECT_EQ(fat.bottom_exponents[i], 0.0);
+    const Vec4& r = fat.bottom_roots[i];
+    EXPECT_NEAR(std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]), 1.0 + 2.0 * h, 0.2 * h);  // outward, 2 cells
+    const Vec3 q{r[0], r[1], r[2]};
+    const Vec3& p = surface[std::size_t(i)];  // taken in the given order
+    EXPECT_NEAR(q[0] - p[0], 2.0 * h * p[0], 0.2 * h);
+  }
+  const Vec3 x{0.3, -0.2, 0.5};
+  EXPECT_DOUBLE_EQ(OneStepLogModulus(fat, x), OneStepLogModulus(before, x));
+  RationalMap tight = ball(1.1);  // ends within the 2 cells: nothing spills that far
+  EXPECT_EQ(AddHollowRoots(tight, sdf, surface, o), 0);
+  EXPECT_EQ(tight.bottom_count(), 0);
+  o.hollow_roots = -1;
+  EXPECT_THROW(AddHollowRoots(fat, sdf, surface, o), Error);
 }
 
 TEST(InitialGuess, ScanPutsTheZeroLevelOnTheSphere) {

@@ -85,7 +85,8 @@ SphereProblem MakeSphereProblem(int candidates) {
 
 TEST(Monopole, GreedyFitOnTheSphereReachesEpsilon) {
   const SphereProblem p = MakeSphereProblem(5000);
-  GreedyFitOptions opt;  // epsilon 0.04, as the paper
+  GreedyFitOptions opt;
+  opt.epsilon = 0.04;  // the paper's
   GreedyFitSummary s;
   int calls = 0;
   const auto m = GreedyMonopoleFit(p.points, p.targets, p.candidates, opt, &s,

@@ -56,7 +56,8 @@ TEST(MonopolesCommand, WritesTheInitialGuessOfTheBunny) {
   std::string out;
   ASSERT_EQ(RunQuijibo(std::string(QUIJIBO_SOURCE_DIR) + "/data/bunny.obj -o " + dir.string() +
                     " -r 25 --initializer monopoles --target-box reference --origin center"
-                    " --candidates 10000 --bem-elements 600 --png-size 64 --amplitude 50",
+                    " --candidates 10000 --bem-elements 600 --png-size 64 --amplitude 50"
+                    " --epsilon 0.04 --no-both-signs --hollow-roots 0",
                 &out),
             0)
       << out;

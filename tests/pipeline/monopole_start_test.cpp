@@ -68,6 +68,7 @@ TEST(MonopoleStart, TheSphereGetsAConvergedUprightStart) {
   InitialGuessStageOptions o;
   o.kind = "monopoles";
   o.monopole.sampling.count = 4000;
+  o.monopole.fit.epsilon = 0.04;
   o.png_size = 32;
   const InitialGuessResult r = InitialGuess(target, o);
   EXPECT_LE(r.summary.at("relative_residual").get<double>(), 0.04);
