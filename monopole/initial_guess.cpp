@@ -198,9 +198,13 @@ RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFram
     f.top_exponents.insert(f.top_exponents.begin(), std::isfinite(smallest) ? smallest : 1.0);
   }
   const LnCScan s = ScanLevelByIou(f, sdf, o.alpha);
+  // The steepness goes into tau and beta, not into the exponents: the same L, but the bottom
+  // exponents (the twins and hollow roots at 0) then have the top ones' leverage. With beta left at
+  // 1 the V pass scales tau alone (bottom exponents summing to 0 give s_B no gradient) and the F
+  // pass moves the bottom roots tau / beta times slower: the tooth, demo schedule, 0.871 against
+  // 0.935 (docs/benchmarks.md §22).
   m = f;
-  for (double& e : m.top_exponents) e *= s.steepness;
-  for (double& e : m.bottom_exponents) e *= s.steepness;
+  m.tau = m.beta = s.steepness;
   m.ln_C = s.ln_C;
   if (scan) *scan = s;
   return m;

@@ -5,10 +5,10 @@
 //     the normalized frame's units (divided by the fractal radius), as the reference fits there;
 //   - optionally the reference's leading zero roots: a root at the origin with exponent 1 first in
 //     top and in bottom (not amplified);
-//   - tau = beta = 1, and ln C and the steepness from `scan`: by default (StartScan::kIou) the level
-//     set of F with the best one-step IoU, the exponents scaled so the start is not saturated, and the
-//     zero roots replaced by one top root at the origin (below); or the reference's one-dimensional
-//     scan (StartScan::kReference): with C = 1, F = log|R|
+//   - ln C and the steepness from `scan`: by default (StartScan::kIou) the level set of F with the
+//     best one-step IoU, tau = beta = the steepness that keeps the start from saturating, and the
+//     zero roots replaced by one top root at the origin (below); or, with tau = beta = 1, the
+//     reference's one-dimensional scan (StartScan::kReference): with C = 1, F = log|R|
 //     on the scan grid (singular values replaced by the mean), minimize
 //     sum -tanh(alpha (F - t)) Wu over t (100 samples over [min F, max F], then three refinements of
 //     +-5 steps at a tenth of the step); ln C = -t*. Wu is the un-normalized layer weight
@@ -79,7 +79,7 @@ struct LnCScan {
 // kIou's scan: for F of `map` (its exponents, tau = beta = 1, ln C = 0) on the grid of `sdf`, the
 // level t maximizing the IoU of {F < t} with {phi < 0}, and the factor s making the median of
 // alpha s |F - t| over the cells with |phi| <= 2 cells equal to 1. Returns ln C = -s t, the IoU and s
-// (the caller scales the exponents by s).
+// (the caller sets tau = beta = s).
 LnCScan ScanLevelByIou(const RationalMap& map, const ScalarGrid& sdf, double alpha);
 
 // The initial map. `monopoles` in the fractal frame of `frame`; `sdf` the target on its grid.

@@ -34,6 +34,11 @@ TEST(InitialGuess, SplitsWeightsIntoTopAndBottomRootsWithTheAmplitude) {
   EXPECT_NEAR(scanned.top_exponents[1] / scanned.top_exponents[2], 0.2 / 0.05, 1e-12);
   EXPECT_NEAR(scanned.bottom_exponents[0] / scanned.top_exponents[1], 0.1 / 0.2, 1e-12);
   EXPECT_NEAR(scanned.top_exponents[0], scanned.top_exponents[2], 1e-12);  // the smallest monopole's
+  // The steepness is tau and beta alike, the exponents the monopoles' (w / radius * amplitude): the
+  // bottom roots keep the top roots' leverage in the passes.
+  EXPECT_EQ(scanned.tau, scanned.beta);
+  EXPECT_GT(scanned.tau, 0.0);
+  EXPECT_DOUBLE_EQ(scanned.top_exponents[1], 0.2 / 4.0 * 40.0);
   o.scan = StartScan::kReference;
   RationalMap m = InitialMap(monopoles, frame, Sphere(1.0), o);
   // The reference scan: leading zero roots first, exponent 1, not amplified.
