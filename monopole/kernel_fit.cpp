@@ -1,5 +1,7 @@
 #include "monopole/kernel_fit.h"
 
+#include "quijibo/energy.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -10,6 +12,7 @@
 
 #include "monopole/sampling.h"
 #include "util/error.h"
+#include "quijibo/energy.h"
 #include "quijibo/iou.h"
 
 namespace quijibo::monopole {
@@ -454,6 +457,7 @@ StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alph
   check.iou = IntersectionOverUnion(inter, uni);
   check.saturated = n ? double(saturated) / double(n) : 0;
   check.inverted = !(check.median_inside < check.median_outside);
+  check.psi = EnergyOfField(MakeEnergyGrid(sdf, kDefaultWeightField), L, alpha);
   return check;
 }
 

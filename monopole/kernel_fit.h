@@ -104,6 +104,9 @@ struct StartCheck {
   double iou = 0;          // of {L < 0} and {phi < 0} on the grid
   double saturated = 0;    // fraction of cells with |alpha L| > 18 (tanh flat to 1e-15)
   bool inverted = false;   // L is not lower inside than outside (medians)
+  // psi of the start under the default weights (kDefaultWeightField) on the grid's cells, counted
+  // from the better trivial set: >= 0 is no better than the empty set, which the passes then reach.
+  double psi = 0;
 };
 StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alpha = 10.0);
 

@@ -326,6 +326,21 @@ MonopoleStartVerdict JudgeMonopoleStart(const monopole::GreedyFitSummary& fit, d
     v.refusal = text;
     return v;
   }
+  // A start no better than the empty set under the energy the passes minimize: its V pass empties the
+  // set in one step and the run keeps the start (the hand, the pretzel: psi 0.03 and 0.06, IoU 0.35
+  // and 0.26, docs/benchmarks.md §22).
+  if (start.psi >= 0) {
+    char text[1024];
+    std::snprintf(text, sizeof text,
+                  "the monopole start scores psi = %.3g under the default energy, no better than the empty set "
+                  "(psi = 0), though its one-step IoU is %.3g: the passes would lead it to the empty set, and the run "
+                  "would keep this start; %s. The monopoles' field has no level set that follows this shape (thin "
+                  "parts, which a fit of a conductor's charges fills in); use the log-kernel fit (\"kind\": "
+                  "\"log-kernel\", the default; --initializer log-kernel) (docs/fidelity.md §12)",
+                  start.psi, start.iou, fit_text);
+    v.refusal = text;
+    return v;
+  }
   v.warning = warning;
   return v;
 }
@@ -429,6 +444,7 @@ json FitSummary(const TargetResult& target, const O& o, const RationalMap& map, 
               {"median_L_outside", start.median_outside},
               {"iou", start.iou},
               {"saturated_fraction", start.saturated},
+              {"psi", start.psi},
               {"inverted", start.inverted}}}};
   if (o.kind == "log-kernel") {
     s["log_kernel"] = {{"rows", kfit.rows},

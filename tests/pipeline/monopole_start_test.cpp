@@ -46,13 +46,26 @@ TEST(MonopoleStart, AStartThatBarelyOverlapsTheShapeIsRefused) {
 }
 
 TEST(MonopoleStart, AnUprightConvergedStartPassesAndAnUnconvergedOneIsWarnedOf) {
-  const monopole::StartCheck start{.median_inside = -1.4, .median_outside = -0.19, .iou = 0.28};
+  const monopole::StartCheck start{.median_inside = -1.4, .median_outside = -0.19, .iou = 0.28, .psi = -0.1};
   EXPECT_TRUE(Judge(0.0396, monopole::FitStop::kConverged, start).refusal.empty());
   EXPECT_TRUE(Judge(0.0396, monopole::FitStop::kConverged, start).warning.empty());
   const MonopoleStartVerdict v = Judge(0.05, monopole::FitStop::kMaxMonopoles, start);
   EXPECT_TRUE(v.refusal.empty());
   EXPECT_NE(v.warning.find("0.05"), std::string::npos) << v.warning;
   EXPECT_NE(v.warning.find("max_monopoles reached"), std::string::npos) << v.warning;
+}
+
+// The hand's start (docs/benchmarks.md §22): upright and overlapping the shape, but no better than
+// the empty set under the energy, so the V pass empties it. Refused, saying why and what to do.
+TEST(MonopoleStart, AStartNoBetterThanTheEmptySetIsRefused) {
+  const monopole::StartCheck start{.median_inside = -0.5, .median_outside = 0.3, .iou = 0.347, .psi = 0.032};
+  const MonopoleStartVerdict v = Judge(0.0025, monopole::FitStop::kConverged, start);
+  ASSERT_FALSE(v.refusal.empty());
+  for (const char* part : {"psi = 0.032", "empty set", "0.347", "log-kernel"})
+    EXPECT_NE(v.refusal.find(part), std::string::npos) << part << " in: " << v.refusal;
+  monopole::StartCheck better = start;
+  better.psi = -0.01;
+  EXPECT_TRUE(Judge(0.0025, monopole::FitStop::kConverged, better).refusal.empty());
 }
 
 // A sphere, small enough for seconds: the paper's fit converges and its start is upright, on the
@@ -74,6 +87,7 @@ TEST(MonopoleStart, TheSphereGetsAConvergedUprightStart) {
   EXPECT_LE(r.summary.at("relative_residual").get<double>(), 0.04);
   EXPECT_EQ(r.summary.at("fit_stop").get<std::string>(), "converged");
   EXPECT_FALSE(r.summary.at("start").at("inverted").get<bool>());
+  EXPECT_LT(r.summary.at("start").at("psi").get<double>(), 0.0);  // better than the empty set
   EXPECT_GT(r.summary.at("start").at("iou").get<double>(), 0.25);  // no low-overlap warning
   // The IoU scan (the default) starts unsaturated, with the best one-step IoU of the monopoles'
   // sets: at least the reference scan's, whose amplitude saturates the start.
