@@ -202,7 +202,7 @@ RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFram
   // exponents (the twins and hollow roots at 0) then have the top ones' leverage. With beta left at
   // 1 the V pass scales tau alone (bottom exponents summing to 0 give s_B no gradient) and the F
   // pass moves the bottom roots tau / beta times slower: the tooth, demo schedule, 0.871 against
-  // 0.935 (docs/benchmarks.md §22).
+  // 0.937 (docs/benchmarks.md §22).
   m = f;
   m.tau = m.beta = s.steepness;
   m.ln_C = s.ln_C;

@@ -1,7 +1,5 @@
 #include "monopole/kernel_fit.h"
 
-#include "quijibo/energy.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
