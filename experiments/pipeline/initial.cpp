@@ -438,6 +438,8 @@ json FitSummary(const TargetResult& target, const O& o, const RationalMap& map, 
             {"degenerate_dropped", target.read_report.degenerate_dropped},
             {"top_roots", map.top_count()},
             {"bottom_roots", map.bottom_count()},
+            {"zero_exponent_roots", std::count(map.top_exponents.begin(), map.top_exponents.end(), 0.0) +
+                                        std::count(map.bottom_exponents.begin(), map.bottom_exponents.end(), 0.0)},
             {"ln_C", map.ln_C},
             {"start",
              {{"median_L_inside", start.median_inside},

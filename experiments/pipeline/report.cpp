@@ -46,7 +46,11 @@ void InitialSection(Page& page) {
     md << "## Initial guess\n\n| mesh triangles | monopoles (top/bottom) | relative residual | BEM elements | ln C |\n"
           "|---|---|---|---|---|\n| "
        << monopoles.value("triangles", 0) << " | " << monopoles.value("monopoles", 0) << " ("
-       << monopoles.value("top_roots", 0) << "/" << monopoles.value("bottom_roots", 0) << " roots) | "
+       << monopoles.value("top_roots", 0) << "/" << monopoles.value("bottom_roots", 0) << " roots"
+       << (monopoles.value("zero_exponent_roots", 0) > 0
+               ? ", " + std::to_string(monopoles.value("zero_exponent_roots", 0)) + " of them at exponent 0"
+               : std::string())
+       << ") | "
        << Fixed(monopoles.value("relative_residual", 0.0), 4) << " | " << monopoles.value("bem_elements", 0) << " | "
        << Fixed(monopoles.value("ln_C", 0.0), 3) << " |\n\n";
   } else if (page.Exists("initial/map.json")) {
