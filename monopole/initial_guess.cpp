@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "monopole/vec3_ops.h"
 #include "util/error.h"
 #include "quijibo/iou.h"
 #include "quijibo/target.h"
@@ -27,20 +28,15 @@ std::string InitialGuessOptions::Validate() const {
 int AddHollowRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
                    const InitialGuessOptions& o) {
   if (auto why = o.Validate(); !why.empty()) throw Error("initial guess: " + why);
-  const double h = sdf.frame.spacing;
+  using namespace monopole_detail;
+  const double d = o.hollow_offset_cells * sdf.frame.spacing;
   int added = 0;
   for (const Vec3& p : surface) {
     if (added >= o.hollow_roots) break;
-    Vec3 n;
-    for (int a = 0; a < 3; ++a) {
-      Vec3 lo = p, hi = p;
-      lo[a] -= h, hi[a] += h;
-      n[a] = sdf.sample(hi) - sdf.sample(lo);
-    }
-    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    const Vec3 n = Gradient(sdf, p);
+    const double len = Norm(n);
     if (!(len > 0) || !std::isfinite(len)) continue;
-    const Vec3 q{p[0] + o.hollow_offset_cells * h * n[0] / len, p[1] + o.hollow_offset_cells * h * n[1] / len,
-                 p[2] + o.hollow_offset_cells * h * n[2] / len};
+    const Vec3 q = Add(p, Scale(n, d / len));
     if (!(sdf.sample(q) > 0) || !(OneStepLogModulus(map, q) < 0)) continue;
     map.bottom_roots.push_back({q[0], q[1], q[2], 0.0});
     map.bottom_exponents.push_back(0.0);

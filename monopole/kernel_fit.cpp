@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include "monopole/sampling.h"
+#include "monopole/vec3_ops.h"
 #include "util/error.h"
 #include "quijibo/energy.h"
 #include "quijibo/iou.h"
@@ -33,16 +34,7 @@ std::string KernelFitOptions::Validate() const {
 
 namespace {
 
-Vec3 Gradient(const ScalarGrid& sdf, const Vec3& p) {
-  const double h = sdf.frame.spacing;
-  Vec3 g;
-  for (int a = 0; a < 3; ++a) {
-    Vec3 lo = p, hi = p;
-    lo[a] -= h, hi[a] += h;
-    g[a] = (sdf.sample(hi) - sdf.sample(lo)) / (2 * h);
-  }
-  return g;
-}
+using monopole_detail::Gradient;
 
 // Points spread evenly on a sphere (Fibonacci lattice).
 std::vector<Vec3> SpherePoints(const Vec3& c, double radius, int count) {

@@ -17,4 +17,16 @@ inline Vec3 Cross(const Vec3& a, const Vec3& b) {
 inline double Norm(const Vec3& a) { return std::sqrt(Dot(a, a)); }
 inline double Distance(const Vec3& a, const Vec3& b) { return Norm(Sub(a, b)); }
 
+// The gradient of `sdf` at p by central differences one grid spacing wide (trilinear samples).
+inline Vec3 Gradient(const ScalarGrid& sdf, const Vec3& p) {
+  const double h = sdf.frame.spacing;
+  Vec3 g;
+  for (int a = 0; a < 3; ++a) {
+    Vec3 lo = p, hi = p;
+    lo[a] -= h, hi[a] += h;
+    g[a] = (sdf.sample(hi) - sdf.sample(lo)) / (2 * h);
+  }
+  return g;
+}
+
 }  // namespace quijibo::monopole::monopole_detail
