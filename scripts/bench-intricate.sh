@@ -4,7 +4,11 @@
 # pictures), then runs `quijibo mesh … --stream` under /usr/bin/time -v while sampling its resident
 # set, CPU seconds and scratch files every 30 s.
 #
-#   scripts/bench-intricate.sh OUT_DIR [RESOLUTION]     (default 2048; build/experiments/quijibo)
+#   scripts/bench-intricate.sh OUT_DIR [RESOLUTION [MESH_OPTION ...]]   (default 2048; build/experiments/quijibo)
+#
+# Options after the resolution go to `quijibo mesh` after bunny-intricate's settings, e.g.
+# `--bisection-steps 0 --bisection-interpolate` (plain marching cubes: the same triangles, fewer
+# evaluations; benchmarks.md §25, §28).
 #
 # OUT_DIR gets map.json (reused when present), bunny<RES>.ply, summary.json, time.txt (time -v) and
 # samples.log (time, VmRSS and VmHWM in kB, CPU s, scratch bytes). At 2048³ the run takes hours on 2
@@ -13,6 +17,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 out=${1:?usage: scripts/bench-intricate.sh OUT_DIR [RESOLUTION]}
 res=${2:-2048}
+shift $(( $# < 2 ? $# : 2 ))
 quijibo=${QUIJIBO:-$here/build/experiments/quijibo}
 [ -x "$quijibo" ] || { echo "bench-intricate: $quijibo not found: build first (scripts/build.sh) or set QUIJIBO" >&2; exit 1; }
 mkdir -p "$out"
@@ -38,7 +43,7 @@ fi
 # The mesh stage's settings of bunny-intricate.json.
 settings=(-n 4 --detail 4 --iteration-frame reference --translate 0,0,1 --translate-potential -2)
 /usr/bin/time -v -o "$out/time.txt" "$quijibo" -q mesh "$out/map.json" -o "$out/bunny$res.ply" "${settings[@]}" \
-  --resolution "$res" --stream --summary "$out/summary.json" &
+  --resolution "$res" --stream --summary "$out/summary.json" "$@" &
 timer=$!
 : > "$out/samples.log"
 while kill -0 "$timer" 2>/dev/null; do
