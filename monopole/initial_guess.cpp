@@ -22,27 +22,58 @@ std::string InitialGuessOptions::Validate() const {
   if (auto why = CheckRange("hollow_offset_cells", SettingType::kNumber, hollow_offset_cells, kHollowOffsetRange);
       !why.empty())
     return why;
+  if (auto why = CheckRange("attract_roots", SettingType::kInteger, attract_roots, kAttractRootsRange); !why.empty())
+    return why;
+  if (auto why = CheckRange("attract_offset_cells", SettingType::kNumber, attract_offset_cells, kAttractOffsetRange);
+      !why.empty())
+    return why;
   return {};
 }
+
+namespace {
+
+// Roots of exponent 0 at up to `count` points offset from `surface` along the SDF's normal by
+// `offset_cells` cells (outward for bottom roots, inward for top roots; inward, halved up to twice
+// while the point is not inside), kept where the shape and the start's set disagree there.
+int AddOffsetRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface, int count,
+                   double offset_cells, bool top) {
+  using namespace monopole_detail;
+  const double d = offset_cells * sdf.frame.spacing;
+  const double sign = top ? -1.0 : 1.0;
+  int added = 0;
+  for (const Vec3& p : surface) {
+    if (added >= count) break;
+    const Vec3 n = Gradient(sdf, p);
+    const double len = Norm(n);
+    if (!(len > 0) || !std::isfinite(len)) continue;
+    Vec3 q = Add(p, Scale(n, sign * d / len));
+    for (int halving = 0; top && halving < 2 && !(sdf.sample(q) < 0); ++halving)
+      q = Add(p, Scale(n, sign * d / len / double(2 << halving)));
+    const bool shape_says = top ? sdf.sample(q) < 0 : sdf.sample(q) > 0;
+    const double L = OneStepLogModulus(map, q);
+    const bool set_disagrees = top ? L > 0 : L < 0;
+    if (!shape_says || !set_disagrees) continue;
+    auto& roots = top ? map.top_roots : map.bottom_roots;
+    auto& exponents = top ? map.top_exponents : map.bottom_exponents;
+    roots.push_back({q[0], q[1], q[2], 0.0});
+    exponents.push_back(0.0);
+    ++added;
+  }
+  return added;
+}
+
+}  // namespace
 
 int AddHollowRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
                    const InitialGuessOptions& o) {
   if (auto why = o.Validate(); !why.empty()) throw Error("initial guess: " + why);
-  using namespace monopole_detail;
-  const double d = o.hollow_offset_cells * sdf.frame.spacing;
-  int added = 0;
-  for (const Vec3& p : surface) {
-    if (added >= o.hollow_roots) break;
-    const Vec3 n = Gradient(sdf, p);
-    const double len = Norm(n);
-    if (!(len > 0) || !std::isfinite(len)) continue;
-    const Vec3 q = Add(p, Scale(n, d / len));
-    if (!(sdf.sample(q) > 0) || !(OneStepLogModulus(map, q) < 0)) continue;
-    map.bottom_roots.push_back({q[0], q[1], q[2], 0.0});
-    map.bottom_exponents.push_back(0.0);
-    ++added;
-  }
-  return added;
+  return AddOffsetRoots(map, sdf, surface, o.hollow_roots, o.hollow_offset_cells, false);
+}
+
+int AddAttractRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
+                    const InitialGuessOptions& o) {
+  if (auto why = o.Validate(); !why.empty()) throw Error("initial guess: " + why);
+  return AddOffsetRoots(map, sdf, surface, o.attract_roots, o.attract_offset_cells, true);
 }
 
 LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, double alpha) {

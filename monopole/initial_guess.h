@@ -64,6 +64,15 @@ struct InitialGuessOptions {
   static constexpr ValueRange kHollowRootsRange{0, 4000};
   double hollow_offset_cells = 2.0;
   static constexpr ValueRange kHollowOffsetRange{0.0, 20.0};
+  // Top roots (exponent 0) where the start's set falls short of the shape: at most this many surface
+  // points whose inward point `attract_offset_cells` deep (halved up to twice where the part is
+  // thinner) is inside the shape and outside the start's set {L < 0} get a top root there. The
+  // paper's attractive roots "pull J towards thin, convex features"; a thin part the start's hull
+  // misses (a leg, a spike) has no monopole of weight to pull, so the optimizer had nothing to grow.
+  int attract_roots = 0;
+  static constexpr ValueRange kAttractRootsRange{0, 4000};
+  double attract_offset_cells = 2.0;
+  static constexpr ValueRange kAttractOffsetRange{0.0, 20.0};
   std::string Validate() const;
 };
 
@@ -94,6 +103,14 @@ RationalMap InitialMap(const std::vector<Monopole>& monopoles, const FractalFram
 // (OneStepLogModulus < 0); the root goes at that outward point. Returns how many were added.
 int AddHollowRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
                    const InitialGuessOptions& options);
+
+// Adds `options.attract_roots` top roots of exponent 0 to `map`, the inward mirror of AddHollowRoots:
+// from `surface` in order, those whose point p - d n, d = attract_offset_cells * sdf spacing (d/2,
+// then d/4, where that point is not inside: a part thinner than d), is inside the shape (sdf < 0)
+// and outside the start's set (OneStepLogModulus > 0); the root goes at that inward point. Returns
+// how many were added.
+int AddAttractRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
+                    const InitialGuessOptions& options);
 
 // The reference's 1-D scan for ln C of `map` (its exponents, tau = beta = 1 as given).
 LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, double alpha);

@@ -175,6 +175,20 @@ void AddMonopoleSettings(Schema<O>& s) {
           [](auto& o) -> double& { return o.guess.hollow_offset_cells; },
           monopole::InitialGuessOptions::kHollowOffsetRange)
       .When(Kind({"monopoles"}))
+      .Integer(
+          "attract_roots", "--attract-roots",
+          "monopoles: at most this many top roots (exponent 0) where the start's set falls short of the shape",
+          [](auto& o) -> int& { return o.guess.attract_roots; }, monopole::InitialGuessOptions::kAttractRootsRange)
+      .Doc("monopoles: top roots of exponent 0 at up to this many points `attract_offset` cells inside the "
+           "surface (half or a quarter of that in parts thinner than it) that the start's set {L < 0} does not "
+           "reach (blue-noise surface samples in a seeded order), so the optimizer can pull the set into thin "
+           "parts the P fit's hull misses ([fidelity.md](fidelity.md) §12)")
+      .When(Kind({"monopoles"}))
+      .Number(
+          "attract_offset", "--attract-offset", "monopoles: depth of an attract root inside the surface, in cells",
+          [](auto& o) -> double& { return o.guess.attract_offset_cells; },
+          monopole::InitialGuessOptions::kAttractOffsetRange)
+      .When(Kind({"monopoles"}))
       .Enum(
           "scan", "--start-scan",
           "monopoles: iou (the level of the monopoles' field with the best one-step IoU, made as steep as the "
@@ -387,12 +401,14 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
   const auto t1 = std::chrono::steady_clock::now();
   monopole::LnCScan scan;
   RationalMap map = monopole::InitialMap(mono.monopoles, target.frame, target.grid, o.guess, &scan);
-  int hollow = 0;
-  if (o.guess.hollow_roots > 0) {
+  int hollow = 0, attract = 0;
+  if (o.guess.hollow_roots > 0 || o.guess.attract_roots > 0) {
     monopole::SamplingOptions so = mo.sampling;
-    so.count = std::max(2000, 10 * o.guess.hollow_roots);
-    hollow = monopole::AddHollowRoots(
-        map, target.grid, monopole::PoissonDiskSample(target.mesh.vertices, target.mesh.triangles, so), o.guess);
+    so.count = std::max(2000, 10 * std::max(o.guess.hollow_roots, o.guess.attract_roots));
+    const std::vector<Vec3> surface = monopole::PoissonDiskSample(target.mesh.vertices, target.mesh.triangles, so);
+    // Roots of exponent 0 leave L as it is, so the order of the two does not change which are chosen.
+    hollow = monopole::AddHollowRoots(map, target.grid, surface, o.guess);
+    attract = monopole::AddAttractRoots(map, target.grid, surface, o.guess);
   }
   scan_seconds = Since(t1);
   map.provenance = {{"made_by", "quijibo monopoles"},
@@ -408,6 +424,7 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
                     {"scan", monopole::StartScanName(o.guess.scan)},
                     {"both_signs", o.guess.both_signs},
                     {"hollow_roots", hollow},
+                    {"attract_roots", attract},
                     {"steepness", scan.steepness},
                     {"relative_residual", mono.fit.final_relative_residual},
                     {"monopoles", mono.monopoles.size()}};

@@ -126,6 +126,58 @@ TEST(InitialGuess, HollowRootsGoWhereTheSetSpillsOutOfTheShape) {
   EXPECT_THROW(AddHollowRoots(fat, sdf, surface, o), Error);
 }
 
+// Attract roots, the inward mirror: top roots where the shape reaches beyond the start's set,
+// attract_offset_cells inside the surface, at exponent 0, at most attract_roots of them.
+TEST(InitialGuess, AttractRootsGoWhereTheSetFallsShortOfTheShape) {
+  const ScalarGrid sdf = Sphere(1.0);
+  const double h = sdf.frame.spacing;
+  std::vector<Vec3> surface;
+  for (int i = 0; i < 40; ++i) {
+    const double t = 0.3 + 0.07 * i, u = 0.9 * i;
+    surface.push_back({std::sin(t) * std::cos(u), std::sin(t) * std::sin(u), std::cos(t)});
+  }
+  auto ball = [](double radius) {
+    RationalMap m;
+    m.top_roots = {{0, 0, 0, 0}};
+    m.top_exponents = {1.0};
+    m.ln_C = -std::log(radius);
+    return m;
+  };
+  InitialGuessOptions o;
+  o.attract_roots = 25;
+  RationalMap thin = ball(0.6);  // stops well inside the unit sphere
+  const RationalMap before = thin;
+  EXPECT_EQ(AddAttractRoots(thin, sdf, surface, o), 25);
+  ASSERT_EQ(thin.top_count(), 26);
+  EXPECT_EQ(thin.bottom_count(), 0);
+  for (int i = 0; i < 25; ++i) {
+    EXPECT_EQ(thin.top_exponents[std::size_t(i) + 1], 0.0);
+    const Vec4& r = thin.top_roots[std::size_t(i) + 1];
+    EXPECT_NEAR(std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]), 1.0 - 2.0 * h, 0.2 * h);  // inward, 2 cells
+    const Vec3& p = surface[std::size_t(i)];  // taken in the given order
+    EXPECT_NEAR(r[0] - p[0], -2.0 * h * p[0], 0.2 * h);
+  }
+  const Vec3 x{0.3, -0.2, 0.5};
+  EXPECT_DOUBLE_EQ(OneStepLogModulus(thin, x), OneStepLogModulus(before, x));
+  RationalMap full = ball(0.95);  // reaches within the 2 cells: nothing falls short that deep
+  EXPECT_EQ(AddAttractRoots(full, sdf, surface, o), 0);
+  EXPECT_EQ(full.top_count(), 1);
+  // A part thinner than the offset: the point is taken at half the depth. On a sphere of radius
+  // 0.5 (6 cells) 14 cells in is outside again; 7 cells in is inside, a cell past the centre.
+  o.attract_offset_cells = 14.0;
+  const ScalarGrid small = Sphere(0.5);
+  std::vector<Vec3> on_small;
+  for (const Vec3& p : surface) on_small.push_back({0.5 * p[0], 0.5 * p[1], 0.5 * p[2]});
+  RationalMap tiny = ball(0.05);
+  EXPECT_EQ(AddAttractRoots(tiny, small, on_small, o), 25);
+  for (int i = 1; i <= 25; ++i) {
+    const Vec4& r = tiny.top_roots[std::size_t(i)];
+    EXPECT_NEAR(std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]), 7.0 * h - 0.5, 0.2 * h);
+  }
+  o.attract_roots = 4001;
+  EXPECT_THROW(AddAttractRoots(thin, sdf, surface, o), Error);
+}
+
 TEST(InitialGuess, ScanPutsTheZeroLevelOnTheSphere) {
   // One top root at the centre: L = ln C + ln|q|, zero on |q| = e^{-ln C}. The scan must find
   // ln C = -ln a to within a scan cell.
