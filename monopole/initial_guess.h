@@ -69,7 +69,7 @@ struct InitialGuessOptions {
   // thinner) is inside the shape and outside the start's set {L < 0} get a top root there. The
   // paper's attractive roots "pull J towards thin, convex features"; a thin part the start's hull
   // misses (a leg, a spike) has no monopole of weight to pull, so the optimizer had nothing to grow.
-  int attract_roots = 0;
+  int attract_roots = 200;
   static constexpr ValueRange kAttractRootsRange{0, 4000};
   double attract_offset_cells = 2.0;
   static constexpr ValueRange kAttractOffsetRange{0.0, 20.0};
