@@ -36,7 +36,7 @@ namespace {
 // `offset_cells` cells (outward for bottom roots, inward for top roots; inward, halved up to twice
 // while the point is not inside), kept where the shape and the start's set disagree there.
 int AddOffsetRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface, int count,
-                   double offset_cells, bool top, bool dipoles) {
+                   double offset_cells, bool top) {
   using namespace monopole_detail;
   const double d = offset_cells * sdf.frame.spacing;
   const double sign = top ? -1.0 : 1.0;
@@ -57,12 +57,6 @@ int AddOffsetRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Ve
     auto& exponents = top ? map.top_exponents : map.bottom_exponents;
     roots.push_back({q[0], q[1], q[2], 0.0});
     exponents.push_back(0.0);
-    if (dipoles) {
-      auto& partners = top ? map.bottom_roots : map.top_roots;
-      auto& partner_exponents = top ? map.bottom_exponents : map.top_exponents;
-      partners.push_back({2 * p[0] - q[0], 2 * p[1] - q[1], 2 * p[2] - q[2], 0.0});
-      partner_exponents.push_back(0.0);
-    }
     ++added;
   }
   return added;
@@ -73,13 +67,13 @@ int AddOffsetRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Ve
 int AddHollowRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
                    const InitialGuessOptions& o) {
   if (auto why = o.Validate(); !why.empty()) throw Error("initial guess: " + why);
-  return AddOffsetRoots(map, sdf, surface, o.hollow_roots, o.hollow_offset_cells, false, o.dipoles);
+  return AddOffsetRoots(map, sdf, surface, o.hollow_roots, o.hollow_offset_cells, false);
 }
 
 int AddAttractRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
                     const InitialGuessOptions& o) {
   if (auto why = o.Validate(); !why.empty()) throw Error("initial guess: " + why);
-  return AddOffsetRoots(map, sdf, surface, o.attract_roots, o.attract_offset_cells, true, o.dipoles);
+  return AddOffsetRoots(map, sdf, surface, o.attract_roots, o.attract_offset_cells, true);
 }
 
 LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, double alpha) {

@@ -73,10 +73,6 @@ struct InitialGuessOptions {
   static constexpr ValueRange kAttractRootsRange{0, 4000};
   double attract_offset_cells = 2.0;
   static constexpr ValueRange kAttractOffsetRange{0.0, 20.0};
-  // Every hollow and attract root gets a partner of the other kind (exponent 0) mirrored across the
-  // surface point, so the optimizer can raise the two as a dipole: the pull of a single root reaches
-  // the whole box through the log kernel, a dipole's falls off with distance.
-  bool dipoles = false;
   std::string Validate() const;
 };
 

@@ -189,11 +189,6 @@ void AddMonopoleSettings(Schema<O>& s) {
           [](auto& o) -> double& { return o.guess.attract_offset_cells; },
           monopole::InitialGuessOptions::kAttractOffsetRange)
       .When(Kind({"monopoles"}))
-      .Boolean("dipoles", "--dipoles",
-               "monopoles: every hollow and attract root with a partner of the other kind (exponent 0) mirrored "
-               "across the surface, so the optimizer can raise the two as a dipole whose pull stays local",
-               [](auto& o) -> bool& { return o.guess.dipoles; })
-      .When(Kind({"monopoles"}))
       .Enum(
           "scan", "--start-scan",
           "monopoles: iou (the level of the monopoles' field with the best one-step IoU, made as steep as the "
