@@ -16,6 +16,25 @@ ScalarGrid Sphere(double a) {
   return AnalyticTarget("sphere:radius=" + std::to_string(a), GridFrame::Cube(49, {0.0, 0.0, 0.0}, 4.0));
 }
 
+// 40 points on the unit sphere, spread in latitude and longitude.
+std::vector<Vec3> PointsOnUnitSphere() {
+  std::vector<Vec3> points;
+  for (int i = 0; i < 40; ++i) {
+    const double t = 0.3 + 0.07 * i, u = 0.9 * i;
+    points.push_back({std::sin(t) * std::cos(u), std::sin(t) * std::sin(u), std::cos(t)});
+  }
+  return points;
+}
+
+// A map whose set {L < 0} is the ball |q| < radius.
+RationalMap Ball(double radius) {
+  RationalMap m;
+  m.top_roots = {{0, 0, 0, 0}};
+  m.top_exponents = {1.0};
+  m.ln_C = -std::log(radius);
+  return m;
+}
+
 TEST(InitialGuess, SplitsWeightsIntoTopAndBottomRootsWithTheAmplitude) {
   FractalFrame frame;
   frame.fractal_radius = 4.0;
@@ -91,21 +110,10 @@ TEST(InitialGuess, BothSignsAddsZeroTwinsAndKeepsTheStart) {
 TEST(InitialGuess, HollowRootsGoWhereTheSetSpillsOutOfTheShape) {
   const ScalarGrid sdf = Sphere(1.0);
   const double h = sdf.frame.spacing;
-  std::vector<Vec3> surface;
-  for (int i = 0; i < 40; ++i) {
-    const double t = 0.3 + 0.07 * i, u = 0.9 * i;
-    surface.push_back({std::sin(t) * std::cos(u), std::sin(t) * std::sin(u), std::cos(t)});
-  }
-  auto ball = [](double radius) {  // the set {L < 0} is the ball |q| < radius
-    RationalMap m;
-    m.top_roots = {{0, 0, 0, 0}};
-    m.top_exponents = {1.0};
-    m.ln_C = -std::log(radius);
-    return m;
-  };
+  const std::vector<Vec3> surface = PointsOnUnitSphere();
   InitialGuessOptions o;
   o.hollow_roots = 25;
-  RationalMap fat = ball(1.5);  // reaches 2 cells (0.167) outside the unit sphere
+  RationalMap fat = Ball(1.5);  // reaches 2 cells (0.167) outside the unit sphere
   const RationalMap before = fat;
   EXPECT_EQ(AddHollowRoots(fat, sdf, surface, o), 25);
   ASSERT_EQ(fat.bottom_count(), 25);
@@ -119,7 +127,7 @@ TEST(InitialGuess, HollowRootsGoWhereTheSetSpillsOutOfTheShape) {
   }
   const Vec3 x{0.3, -0.2, 0.5};
   EXPECT_DOUBLE_EQ(OneStepLogModulus(fat, x), OneStepLogModulus(before, x));
-  RationalMap tight = ball(1.1);  // ends within the 2 cells: nothing spills that far
+  RationalMap tight = Ball(1.1);  // ends within the 2 cells: nothing spills that far
   EXPECT_EQ(AddHollowRoots(tight, sdf, surface, o), 0);
   EXPECT_EQ(tight.bottom_count(), 0);
   o.hollow_roots = -1;
@@ -131,21 +139,10 @@ TEST(InitialGuess, HollowRootsGoWhereTheSetSpillsOutOfTheShape) {
 TEST(InitialGuess, AttractRootsGoWhereTheSetFallsShortOfTheShape) {
   const ScalarGrid sdf = Sphere(1.0);
   const double h = sdf.frame.spacing;
-  std::vector<Vec3> surface;
-  for (int i = 0; i < 40; ++i) {
-    const double t = 0.3 + 0.07 * i, u = 0.9 * i;
-    surface.push_back({std::sin(t) * std::cos(u), std::sin(t) * std::sin(u), std::cos(t)});
-  }
-  auto ball = [](double radius) {
-    RationalMap m;
-    m.top_roots = {{0, 0, 0, 0}};
-    m.top_exponents = {1.0};
-    m.ln_C = -std::log(radius);
-    return m;
-  };
+  const std::vector<Vec3> surface = PointsOnUnitSphere();
   InitialGuessOptions o;
   o.attract_roots = 25;
-  RationalMap thin = ball(0.6);  // stops well inside the unit sphere
+  RationalMap thin = Ball(0.6);  // stops well inside the unit sphere
   const RationalMap before = thin;
   EXPECT_EQ(AddAttractRoots(thin, sdf, surface, o), 25);
   ASSERT_EQ(thin.top_count(), 26);
@@ -159,7 +156,7 @@ TEST(InitialGuess, AttractRootsGoWhereTheSetFallsShortOfTheShape) {
   }
   const Vec3 x{0.3, -0.2, 0.5};
   EXPECT_DOUBLE_EQ(OneStepLogModulus(thin, x), OneStepLogModulus(before, x));
-  RationalMap full = ball(0.95);  // reaches within the 2 cells: nothing falls short that deep
+  RationalMap full = Ball(0.95);  // reaches within the 2 cells: nothing falls short that deep
   EXPECT_EQ(AddAttractRoots(full, sdf, surface, o), 0);
   EXPECT_EQ(full.top_count(), 1);
   // A part thinner than the offset: the point is taken at half the depth. On a sphere of radius
@@ -168,7 +165,7 @@ TEST(InitialGuess, AttractRootsGoWhereTheSetFallsShortOfTheShape) {
   const ScalarGrid small = Sphere(0.5);
   std::vector<Vec3> on_small;
   for (const Vec3& p : surface) on_small.push_back({0.5 * p[0], 0.5 * p[1], 0.5 * p[2]});
-  RationalMap tiny = ball(0.05);
+  RationalMap tiny = Ball(0.05);
   EXPECT_EQ(AddAttractRoots(tiny, small, on_small, o), 25);
   for (int i = 1; i <= 25; ++i) {
     const Vec4& r = tiny.top_roots[std::size_t(i)];
