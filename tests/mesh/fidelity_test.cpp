@@ -12,18 +12,10 @@
 #include "quijibo/julia_setup.h"
 #include "util/error.h"
 #include "quijibo/target.h"
+#include "tests/ball_map.h"
 
 namespace quijibo::mesh {
 namespace {
-
-// One top root at the centre: L = ln C + log|q|, the one-step set is the ball of radius e^-lnC.
-RationalMap Ball(double radius) {
-  RationalMap m;
-  m.top_roots = {{0, 0, 0, 0}};
-  m.top_exponents = {1.0};
-  m.ln_C = -std::log(radius);
-  return m;
-}
 
 ScalarGrid SphereTarget(double radius) {
   return AnalyticTarget("sphere:radius=" + std::to_string(radius), TargetGridFrame(60, FractalFrame{}));
@@ -36,12 +28,12 @@ std::shared_ptr<const RationalMap> Iterated(const RationalMap& m, double detail 
   return std::make_shared<const RationalMap>(MakeJuliaSetup(m, s).map);
 }
 
-// The fidelity of Ball(radius) to the unit sphere, its n-step set after `iterations` (0: none).
+// The fidelity of BallMap(radius) to the unit sphere, its n-step set after `iterations` (0: none).
 Fidelity BallFidelity(double radius, int iterations) {
   FidelityOptions o;
   o.julia.iterations = iterations;
-  if (iterations > 0) o.iterated = Iterated(Ball(radius));
-  return MeasureSets(Ball(radius), SphereTarget(1.0), o);
+  if (iterations > 0) o.iterated = Iterated(testing::BallMap(radius));
+  return MeasureSets(testing::BallMap(radius), SphereTarget(1.0), o);
 }
 
 TEST(Fidelity, AMapWhoseSetIsTheTargetScoresOneAndDoesNotLeak) {
@@ -63,7 +55,7 @@ TEST(Fidelity, ASetTooLargeLeaksOutOfTheShapeBox) {
 }
 
 TEST(Fidelity, VolumeIoUEstimatesTheIoUOfTheVolumes) {
-  // Ball(0.8) inside the unit sphere: the volumes' IoU is 0.8^3.
+  // BallMap(0.8) inside the unit sphere: the volumes' IoU is 0.8^3.
   const Fidelity f = BallFidelity(0.8, 0);
   EXPECT_NEAR(f.one_step.volume_iou, 0.512, 0.01);
   // The n-step set of a map with its only root at the origin is its one-step set (as in
@@ -80,7 +72,7 @@ TEST(Fidelity, VolumeIoUIsFreeOfTheLatticesAliasing) {
   FidelityOptions o;
   o.lattice = 8;
   o.julia.iterations = 0;
-  const Fidelity f = MeasureSets(Ball(0.8), SphereTarget(0.95), o);
+  const Fidelity f = MeasureSets(testing::BallMap(0.8), SphereTarget(0.95), o);
   EXPECT_DOUBLE_EQ(f.one_step.iou, 1.0);
   EXPECT_LT(f.one_step.volume_iou, 0.85);
   EXPECT_GT(f.one_step.volume_iou, 0.3);
@@ -90,7 +82,7 @@ TEST(Fidelity, VolumeIoUDependsOnTheSeedNotOnTheThreads) {
   FidelityOptions o;
   o.lattice = 24;
   o.julia.iterations = 0;
-  const RationalMap m = Ball(0.8);
+  const RationalMap m = testing::BallMap(0.8);
   const ScalarGrid t = SphereTarget(1.0);
   const double a = MeasureSets(m, t, o).one_step.volume_iou;
 #ifdef _OPENMP
@@ -197,7 +189,7 @@ TEST(Fidelity, DetailKeepsTheOneStepSetAndChangesTheNStepSet) {
 TEST(Fidelity, RejectsBadOptions) {
   FidelityOptions o;
   o.lattice = 2;
-  EXPECT_THROW(MeasureSets(Ball(1.0), SphereTarget(1.0), o), Error);
+  EXPECT_THROW(MeasureSets(testing::BallMap(1.0), SphereTarget(1.0), o), Error);
 }
 
 }  // namespace

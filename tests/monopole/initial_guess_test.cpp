@@ -7,6 +7,7 @@
 #include "util/error.h"
 #include "quijibo/frame.h"
 #include "quijibo/target.h"
+#include "tests/ball_map.h"
 
 namespace quijibo::monopole {
 namespace {
@@ -24,15 +25,6 @@ std::vector<Vec3> PointsOnUnitSphere() {
     points.push_back({std::sin(t) * std::cos(u), std::sin(t) * std::sin(u), std::cos(t)});
   }
   return points;
-}
-
-// A map whose set {L < 0} is the ball |q| < radius.
-RationalMap Ball(double radius) {
-  RationalMap m;
-  m.top_roots = {{0, 0, 0, 0}};
-  m.top_exponents = {1.0};
-  m.ln_C = -std::log(radius);
-  return m;
 }
 
 TEST(InitialGuess, SplitsWeightsIntoTopAndBottomRootsWithTheAmplitude) {
@@ -113,7 +105,7 @@ TEST(InitialGuess, HollowRootsGoWhereTheSetSpillsOutOfTheShape) {
   const std::vector<Vec3> surface = PointsOnUnitSphere();
   InitialGuessOptions o;
   o.hollow_roots = 25;
-  RationalMap fat = Ball(1.5);  // reaches 2 cells (0.167) outside the unit sphere
+  RationalMap fat = testing::BallMap(1.5);  // reaches 2 cells (0.167) outside the unit sphere
   const RationalMap before = fat;
   EXPECT_EQ(AddHollowRoots(fat, sdf, surface, o), 25);
   ASSERT_EQ(fat.bottom_count(), 25);
@@ -127,7 +119,7 @@ TEST(InitialGuess, HollowRootsGoWhereTheSetSpillsOutOfTheShape) {
   }
   const Vec3 x{0.3, -0.2, 0.5};
   EXPECT_DOUBLE_EQ(OneStepLogModulus(fat, x), OneStepLogModulus(before, x));
-  RationalMap tight = Ball(1.1);  // ends within the 2 cells: nothing spills that far
+  RationalMap tight = testing::BallMap(1.1);  // ends within the 2 cells: nothing spills that far
   EXPECT_EQ(AddHollowRoots(tight, sdf, surface, o), 0);
   EXPECT_EQ(tight.bottom_count(), 0);
   o.hollow_roots = -1;
@@ -142,7 +134,7 @@ TEST(InitialGuess, AttractRootsGoWhereTheSetFallsShortOfTheShape) {
   const std::vector<Vec3> surface = PointsOnUnitSphere();
   InitialGuessOptions o;
   o.attract_roots = 25;
-  RationalMap thin = Ball(0.6);  // stops well inside the unit sphere
+  RationalMap thin = testing::BallMap(0.6);  // stops well inside the unit sphere
   const RationalMap before = thin;
   EXPECT_EQ(AddAttractRoots(thin, sdf, surface, o), 25);
   ASSERT_EQ(thin.top_count(), 26);
@@ -156,7 +148,7 @@ TEST(InitialGuess, AttractRootsGoWhereTheSetFallsShortOfTheShape) {
   }
   const Vec3 x{0.3, -0.2, 0.5};
   EXPECT_DOUBLE_EQ(OneStepLogModulus(thin, x), OneStepLogModulus(before, x));
-  RationalMap full = Ball(0.95);  // reaches within the 2 cells: nothing falls short that deep
+  RationalMap full = testing::BallMap(0.95);  // reaches within the 2 cells: nothing falls short that deep
   EXPECT_EQ(AddAttractRoots(full, sdf, surface, o), 0);
   EXPECT_EQ(full.top_count(), 1);
   // A part thinner than the offset: the point is taken at half the depth. On a sphere of radius
@@ -165,7 +157,7 @@ TEST(InitialGuess, AttractRootsGoWhereTheSetFallsShortOfTheShape) {
   const ScalarGrid small = Sphere(0.5);
   std::vector<Vec3> on_small;
   for (const Vec3& p : surface) on_small.push_back({0.5 * p[0], 0.5 * p[1], 0.5 * p[2]});
-  RationalMap tiny = Ball(0.05);
+  RationalMap tiny = testing::BallMap(0.05);
   EXPECT_EQ(AddAttractRoots(tiny, small, on_small, o), 25);
   for (int i = 1; i <= 25; ++i) {
     const Vec4& r = tiny.top_roots[std::size_t(i)];

@@ -15,6 +15,7 @@
 #include "quijibo/iou.h"
 #include "quijibo/julia_setup.h"
 #include "quijibo/rational_map.h"
+#include "tests/ball_map.h"
 
 namespace quijibo::pipeline {
 namespace {
@@ -79,15 +80,6 @@ ScalarGrid UnitSphere(int cells, double side) {
   return sphere;
 }
 
-// R = q / radius: the one-step set is the ball of that radius.
-RationalMap Ball(double radius) {
-  RationalMap m;
-  m.top_roots = {Vec4{0.0, 0.0, 0.0, 0.0}};
-  m.top_exponents = {1.0};
-  m.ln_C = -std::log(radius);
-  return m;
-}
-
 // MeasureQuality states the chosen map's IoU on the target grid beside the start's: a map with a
 // larger one-step ball than the target's sphere scores lower than one that matches it.
 TEST(Quality, MeasureQualityGivesTheChosenMapsIoUOnTheTargetGrid) {
@@ -96,10 +88,11 @@ TEST(Quality, MeasureQualityGivesTheChosenMapsIoUOnTheTargetGrid) {
   julia.iterations = 1;
   QualityOptions options;
   options.lattice = 16;
-  options.iterated = std::make_shared<const RationalMap>(MakeJuliaSetup(Ball(1.3), JuliaSetupOptions{}).map);
-  const json j = MeasureQuality(Ball(1.0), Ball(1.3), sphere, julia, 0.0, 10.0, nullptr, options);
+  options.iterated =
+      std::make_shared<const RationalMap>(MakeJuliaSetup(testing::BallMap(1.3), JuliaSetupOptions{}).map);
+  const json j = MeasureQuality(testing::BallMap(1.0), testing::BallMap(1.3), sphere, julia, 0.0, 10.0, nullptr, options);
   const double start = j["target_grid"]["start_iou"], optimized = j["target_grid"]["iou"];
-  EXPECT_EQ(start, monopole::CheckStart(Ball(1.0), sphere).iou);
+  EXPECT_EQ(start, monopole::CheckStart(testing::BallMap(1.0), sphere).iou);
   EXPECT_GT(start, 0.9);
   EXPECT_LT(optimized, 0.6);  // (1 / 1.3)^3 = 0.455 of the larger ball is the sphere
   EXPECT_EQ(j["target_grid"]["resolution"], 24);
@@ -131,8 +124,8 @@ TEST(Quality, AFitThatNarrowsBetweenTheNodesIsWarnedAbout) {
 // undecided out only raises the nodes' figure above CheckStart's, which counts them all.
 TEST(Quality, NodeFitMeasuresTheNodesAndTheCorners) {
   const ScalarGrid sphere = UnitSphere(24, 3.0);
-  const mesh::NodeFit fit = mesh::MeasureNodeFit(Ball(1.0), sphere), large = mesh::MeasureNodeFit(Ball(1.3), sphere);
-  EXPECT_GE(fit.on_nodes, monopole::CheckStart(Ball(1.0), sphere).iou);
+  const mesh::NodeFit fit = mesh::MeasureNodeFit(testing::BallMap(1.0), sphere), large = mesh::MeasureNodeFit(testing::BallMap(1.3), sphere);
+  EXPECT_GE(fit.on_nodes, monopole::CheckStart(testing::BallMap(1.0), sphere).iou);
   EXPECT_EQ(fit.nodes + fit.undecided_nodes, 24 * 24 * 24);
   EXPECT_GT(fit.undecided_nodes, 0);
   EXPECT_EQ(fit.corners + fit.undecided_corners, 23 * 23 * 23);
@@ -148,10 +141,10 @@ TEST(Quality, NodeFitMeasuresTheNodesAndTheCorners) {
 // nodes for it (IoU 0.948 when every corner counted), while a ball a cell too small still is.
 TEST(Quality, NodeFitDoesNotBlameTheExactSetForTrilinearBias) {
   const ScalarGrid sphere = UnitSphere(16, 3.375);
-  const mesh::NodeFit exact = mesh::MeasureNodeFit(Ball(1.0), sphere);
+  const mesh::NodeFit exact = mesh::MeasureNodeFit(testing::BallMap(1.0), sphere);
   EXPECT_EQ(exact.on_nodes, 1.0);
   EXPECT_GT(exact.between_nodes, 0.995);
-  const mesh::NodeFit small = mesh::MeasureNodeFit(Ball(0.75), sphere);
+  const mesh::NodeFit small = mesh::MeasureNodeFit(testing::BallMap(0.75), sphere);
   EXPECT_LT(small.between_nodes, 0.6);
 }
 
