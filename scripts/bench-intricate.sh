@@ -15,7 +15,7 @@
 # cores (§28): start it on an idle machine and run nothing else CPU-bound beside it.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
-out=${1:?usage: scripts/bench-intricate.sh OUT_DIR [RESOLUTION]}
+out=${1:?usage: scripts/bench-intricate.sh OUT_DIR [RESOLUTION [MESH_OPTION ...]]}
 res=${2:-2048}
 shift $(( $# < 2 ? $# : 2 ))
 quijibo=${QUIJIBO:-$here/build/experiments/quijibo}
