@@ -100,6 +100,14 @@ struct OptimizeOptions {
   // reported as making the set worse (pass table, summary.json, log): the report's own bar
   // (QualityThresholds::max_iou_loss).
   double iou_tolerance = 0.002;
+  // Every pass starts with tau = beta (their geometric mean) and the exponents rescaled so that each
+  // root's power tau*a_i (beta*b_j) is unchanged, where tau and beta differ by more than 1 %
+  // (BalanceScales, quijibo/rational_map.h): the same map, a better-conditioned problem. The
+  // gradient in a top exponent is tau times its log-distance sum, in a bottom one beta times it; a
+  // V pass that raises tau and lowers beta (717 and 0.07 on tooth-paper from the monopole start)
+  // leaves the bottom roots 10^4 times slower for L-BFGS, and the concavities they carve out stay
+  // filled (docs/fidelity.md §12). false: the variables as the previous pass left them (the paper).
+  bool balance_scales = true;
   // The log-linear evaluator's log-distance storage and, for kAuto, the finest level's budget
   // (kept in GB, the setting's unit, so that the JSON value reads back exactly).
   LogLinearOptions::Storage storage = LogLinearOptions{}.storage;

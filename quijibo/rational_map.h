@@ -167,6 +167,30 @@ struct VariableIndex {
   static int bottom(const RationalMap& m, int i) { return kFirstExponent + m.top_count() + i; }
 };
 
+// Balances the scales of a variable vector x (RationalMap::variables(), `top_count` top exponents
+// first) when tau and beta differ by more than the factor `min_ratio` (or one of them is 0): tau =
+// beta = c, their geometric mean (or the one that is not 0), and every exponent rescaled so that
+// each root's power, tau*T_i and beta*B_j, is unchanged: the same L and map, in variables where top
+// and bottom roots move at the same rate (OptimizeOptions::balance_scales). The log-kernel start's
+// passes keep tau and beta within 1e-6 of each other, and under the factor nothing changes, so those
+// runs stay bit for bit what they were. Returns whether x changed.
+template <class Vector>
+bool BalanceScales(Vector& x, int top_count, double min_ratio = 1.01) {
+  using std::sqrt;
+  using Scalar = typename Vector::Scalar;
+  const Scalar tau = x[VariableIndex::kTau], beta = x[VariableIndex::kBeta];
+  const bool both = tau > 0 && beta > 0;
+  if (both ? (tau <= beta * Scalar(min_ratio) && beta <= tau * Scalar(min_ratio)) : !(tau > 0 || beta > 0))
+    return false;
+  const Scalar c = both ? Scalar(sqrt(tau * beta)) : (tau > 0 ? tau : beta);
+  const Eigen::Index first = VariableIndex::kFirstExponent, bottoms = x.size() - first - top_count;
+  x.segment(first, top_count) *= Scalar(tau / c);
+  x.segment(first + top_count, bottoms) *= Scalar(beta / c);
+  x[VariableIndex::kTau] = c;
+  x[VariableIndex::kBeta] = c;
+  return true;
+}
+
 // map.json <-> RationalMap. FromJson reports the first problem as
 // "<source>: <JSON pointer>: expected ..., found ...", and rejects unknown keys.
 nlohmann::json MapToJson(const RationalMap& map);

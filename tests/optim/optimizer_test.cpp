@@ -225,6 +225,46 @@ double OneStepIou(const ScalarGrid& sdf, const RationalMap& m) {
   return either ? double(both) / double(either) : 1.0;
 }
 
+// Balancing the scales (every pass's start) is a change of variables: tau = beta, and L the same
+// at every cell; a beta of 0 (the bottom roots out of use) makes every bottom exponent 0.
+TEST(OptimizerTest, BalancingTheScalesKeepsTheMap) {
+  const SmallRun run;
+  RationalMap m = run.map;
+  m.tau = 5.0;
+  m.beta = 0.02;
+  for (double beta : {0.02, 0.0}) {
+    m.beta = beta;
+    Eigen::VectorXd x = m.variables();
+    EXPECT_TRUE(BalanceScales(x, m.top_count()));
+    RationalMap balanced = m;
+    balanced.set_variables(x);
+    const double c = beta > 0 ? std::sqrt(5.0 * beta) : 5.0;
+    EXPECT_NEAR(balanced.tau, c, 1e-15);
+    EXPECT_EQ(balanced.tau, balanced.beta);
+    EXPECT_EQ(balanced.ln_C, m.ln_C);
+    double worst = 0;
+    for (std::int64_t cell = 0; cell < run.sdf.frame.cell_count(); ++cell) {
+      const Vec3 p = run.sdf.frame.cell_center(cell);
+      worst = std::max(worst, std::abs(OneStepLogModulus(balanced, p) - OneStepLogModulus(m, p)));
+    }
+    EXPECT_LT(worst, 1e-12);
+    if (beta == 0) {
+      for (double e : balanced.bottom_exponents) EXPECT_EQ(e, 0.0);
+    }
+    Eigen::Matrix<float128, -1, 1> q = m.variables().cast<float128>();
+    BalanceScales(q, m.top_count());
+    EXPECT_NEAR(double(q[VariableIndex::kBeta]), c, 1e-15);
+  }
+  // Within the factor (1 %) nothing changes, bit for bit.
+  Eigen::VectorXd same = run.map.variables();
+  same[VariableIndex::kBeta] = same[VariableIndex::kTau] * 1.009;
+  const Eigen::VectorXd before = same;
+  EXPECT_FALSE(BalanceScales(same, run.map.top_count()));
+  EXPECT_EQ(same, before);
+  same[VariableIndex::kBeta] = same[VariableIndex::kTau] * 1.02;
+  EXPECT_TRUE(BalanceScales(same, run.map.top_count()));
+}
+
 // keep iou (the default): the returned map is the lowest absolute energy among the maps whose
 // one-step IoU on the target grid is at least the start's; each pass's IoU is recorded and a pass
 // that lowers it by more than the tolerance is flagged. keep lowest-psi returns the lowest energy.
