@@ -84,6 +84,11 @@ json IterationSummary::ToJson() const {
         j["iteration"] = iteration;
         j["energy"] = energy;
       }
+      if (type == Type::kPassStart) {
+        j["tau"] = tau;
+        j["beta"] = beta;
+        j["balanced"] = balanced;
+      }
       if (type == Type::kIteration) {
         j["evaluations"] = evaluations;
         j["projected_gradient"] = projected_gradient_norm;

@@ -61,6 +61,10 @@ struct IterationSummary {
   int from_pass = -1;   // kLevelStart
   int scheduled = 0;    // kLevelRaised
   double fidelity = 1;  // kLevelRaised
+  // kPassStart: tau and beta of the pass's start map, and whether the pass began by balancing them
+  // (OptimizeOptions::balance_scales; not repeated for a pass resumed mid-way).
+  double tau = 0, beta = 0;
+  bool balanced = false;
   nlohmann::json run;   // kRun: schedule, evaluator (resolved), precision, backend, weights, roots
   PassSummary pass;     // kPassEnd
 

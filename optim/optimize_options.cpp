@@ -120,11 +120,11 @@ const Schema<OptimizeOptions>& OptimizeOptions::Settings() {
           .Doc("a pass whose one-step IoU on the target grid ends more than this below its start's is flagged in the "
                "pass table, summary.json (`iou_loss`) and the log")
           .Boolean("balance_scales", "--no-balance-scales",
-                   "Start every pass whose tau and beta differ by more than 1 % with tau = beta and the exponents "
+                   "Start every pass whose tau and beta differ by more than a factor 2 with tau = beta and the exponents "
                    "rescaled to the same map (a better-conditioned problem); --no-balance-scales: the variables as the "
                    "last pass left them (the paper)",
                    [](auto& o) -> bool& { return o.balance_scales; })
-          .Doc("a pass whose τ and β differ by more than 1 % starts with τ = β (their geometric mean) and each root's "
+          .Doc("a pass whose τ and β differ by more than a factor 2 starts with τ = β (their geometric mean) and each root's "
                "exponent rescaled so that its power τ·a (β·b) is unchanged: the same map, but top and bottom roots "
                "move at the same rate under L-BFGS where a pass had driven τ and β apart (the monopole start; the "
                "log-kernel start keeps them equal and is not touched) ([fidelity.md](fidelity.md) §12); `false`: "

@@ -291,10 +291,8 @@ class Runner {
   // One pass's minimization; false when a signal or a callback stopped it.
   bool RunPass(int li, int pj, const PassSpec& spec, LevelObjective<Scalar>& objective) {
     const bool resumed_mid_pass = li == start_.level_index && pj == start_.pass_index && start_.iteration > 0;
-    if (!resumed_mid_pass) {
-      if (o_.balance_scales) BalanceScales(st_.x, map_.top_count());
-      st_.pass_start_x = st_.x;
-    }
+    const bool balanced = !resumed_mid_pass && o_.balance_scales && BalanceScales(st_.x, map_.top_count());
+    if (!resumed_mid_pass) st_.pass_start_x = st_.x;
     const auto pass_t0 = std::chrono::steady_clock::now();
     IterationSummary where;
     where.level = objective.resolution();
@@ -304,6 +302,9 @@ class Runner {
     if (!resumed_mid_pass) {
       IterationSummary s = where;
       s.type = Type::kPassStart;
+      s.tau = ToDouble(st_.x[VariableIndex::kTau]);
+      s.beta = ToDouble(st_.x[VariableIndex::kBeta]);
+      s.balanced = balanced;
       Notify(s);
     }
     objective.BeginPass(spec.kind, st_.pass_start_x, st_.x);

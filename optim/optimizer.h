@@ -101,7 +101,7 @@ struct OptimizeOptions {
   // (QualityThresholds::max_iou_loss).
   double iou_tolerance = 0.002;
   // Every pass starts with tau = beta (their geometric mean) and the exponents rescaled so that each
-  // root's power tau*a_i (beta*b_j) is unchanged, where tau and beta differ by more than 1 %
+  // root's power tau*a_i (beta*b_j) is unchanged, where tau and beta differ by more than a factor 2
   // (BalanceScales, quijibo/rational_map.h): the same map, a better-conditioned problem. The
   // gradient in a top exponent is tau times its log-distance sum, in a bottom one beta times it; a
   // V pass that raises tau and lowers beta (717 and 0.07 on tooth-paper from the monopole start)

@@ -3,6 +3,7 @@
 // refused after any change of the settings, the target or the initial map.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -67,6 +68,36 @@ TEST(IterationCallbackTest, EveryRecordIsTheLogLine) {
   EXPECT_EQ(iterations, total);
   EXPECT_GT(total, 10);
   fs::remove_all(o.out_dir);
+}
+
+// A pass whose start has tau and beta more than a factor 2 apart begins with them balanced (the same map),
+// and says so in its pass_start record; with balance_scales off they stay as the last pass left them.
+TEST(IterationCallbackTest, PassStartsShowTheScalesAndTheirBalancing) {
+  for (bool balance : {true, false}) {
+    SCOPED_TRACE(balance);
+    SmallRun run;
+    run.map.beta = 0.25 * run.map.tau;  // a start whose scales are apart, as after a monopole start's V pass
+    OptimizeOptions o = Small("", "10(VF)");
+    o.balance_scales = balance;
+    std::vector<IterationSummary> starts;
+    Callback record([&](const IterationSummary& s) {
+      if (s.type == IterationSummary::Type::kPassStart) starts.push_back(s);
+      return CallbackReturnType::kContinue;
+    });
+    o.callbacks = {&record};
+    const double tau = run.map.tau, beta = run.map.beta;
+    ASSERT_TRUE(Optimize(run.sdf, run.map, o).complete);
+    ASSERT_EQ(starts.size(), 2u);
+    EXPECT_EQ(starts[0].balanced, balance);
+    if (balance) {
+      EXPECT_DOUBLE_EQ(starts[0].tau, std::sqrt(tau * beta));
+      EXPECT_EQ(starts[0].tau, starts[0].beta);
+      EXPECT_EQ(starts[0].ToJson()["balanced"], true);
+    } else {
+      EXPECT_EQ(starts[0].tau, tau);
+      EXPECT_EQ(starts[0].beta, beta);
+    }
+  }
 }
 
 // An abort on a checkpoint iteration, or at a pass's end, leaves a checkpoint from which --resume
