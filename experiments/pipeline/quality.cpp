@@ -61,6 +61,24 @@ json MeasureQuality(const RationalMap& initial, const RationalMap& chosen, const
   return j;
 }
 
+namespace {
+
+// What a user can do about a set that follows the shape only coarsely: what the run's own files
+// say about it (the last pass at its iteration cap; the monopole start, whose hull misses thin parts).
+std::string CoarseRemedy(const Experiment& e, const std::string& results) {
+  std::string remedy;
+  const json summary = ReadStageFile(results + "/optimized/summary.json");
+  if (summary.is_object() && summary.contains("passes") && summary["passes"].is_array() && !summary["passes"].empty() &&
+      summary["passes"].back().value("stop", "") == "max-iterations")
+    remedy += "; the last pass stopped at its iteration cap: a schedule with more iterations may go further";
+  if (e.initial.kind == "monopoles")
+    remedy += "; the paper's monopole start stops short of thin parts (docs/fidelity.md §12): the log-kernel start "
+              "(\"initial\": {\"kind\": \"log-kernel\"}, the default) follows them";
+  return remedy;
+}
+
+}  // namespace
+
 json RunQuality(const Experiment& e, const std::string& results, const QualityThresholds& t) {
   auto P = [&](const std::string& rel) { return results + "/" + rel; };
   json figures = json::object(), warnings = json::array();
@@ -78,6 +96,9 @@ json RunQuality(const Experiment& e, const std::string& results, const QualityTh
     if (iou1 < t.min_iou)
       warn("the optimized map's one-step set does not follow the shape: one-step IoU " + Fixed(iou1, 3) +
            " (below " + Fixed(t.min_iou, 2) + ")");
+    else if (iou1 < t.coarse_iou)
+      warn("the optimized map's one-step set follows the shape only coarsely: one-step IoU " + Fixed(iou1, 3) +
+           " (below " + Fixed(t.coarse_iou, 2) + "; thin parts are missing or filled in)" + CoarseRemedy(e, results));
     if (leak1 > t.max_leak)
       warn("the one-step set leaks: its part outside the shape box is " + Fixed(leak1, 3) +
            " of the shape's volume (above " + Fixed(t.max_leak, 2) + ")");

@@ -18,6 +18,7 @@ namespace quijibo::pipeline {
 
 struct QualityThresholds {
   double min_iou = 0.5;        // one-step or n-step IoU below: the set does not follow the shape
+  double coarse_iou = 0.8;     // one-step IoU below (and at least min_iou): it follows the shape coarsely
   double max_leak = 0.05;      // one-step or n-step leak above: set outside the shape box
   double max_fill = 0.5;       // fraction of the lattice in the n-step set above: it fills the box
   double max_saturated = 0.5;  // fraction of the start's cells with tanh flat above: no gradient

@@ -644,13 +644,18 @@ RunSummary RunExperiment(const Experiment& e, const RunOptions& o) {
   summary.stages = runner.records();
   summary.seconds = runner.Seconds();
   WriteFileAtomically(out + "/experiment.resolved.json", summary.resolved.dump(2) + "\n");
-  WriteFileAtomically(out + "/run.json", runner.RunJson(summary.stages, summary.seconds, nullptr).dump(1) + "\n");
+  const json run = runner.RunJson(summary.stages, summary.seconds, nullptr);
+  WriteFileAtomically(out + "/run.json", run.dump(1) + "\n");
   if (e.outputs.report) WriteFileAtomically(out + "/report.md", RunReport(e, summary.stages, out, summary.seconds));
   if (e.outputs.report && e.outputs.report_html) try {
       WriteReportHtml(out, RunMeshes(out));
     } catch (const Error& x) {  // the results stand without it
       std::fprintf(stderr, "quijibo: report.html not written: %s\n", x.what());
     }
+  // The Quality section's warnings last, where a user reads (with --quiet too: they are warnings).
+  if (run.contains("quality"))
+    for (const json& w : run["quality"]["warnings"])
+      std::fprintf(stderr, "quijibo: quality warning: %s\n", w.get<std::string>().c_str());
   if (!o.quiet) {
     std::fprintf(stderr, "quijibo: done in %s. Results in %s/\n", FormatDuration(summary.seconds).c_str(), out.c_str());
     if (e.outputs.report) std::fprintf(stderr, "quijibo: start with %s/report.md\n", out.c_str());

@@ -677,10 +677,16 @@ TEST(RunTest, ASetThatFillsTheBoxFromAnInvertedSaturatedStartIsWarnedAbout) {
   std::string err;
   ASSERT_EQ(RunQ({"run", dir + "/e.json", "--out", dir + "/r", "--quiet"}, &err), 0) << err;
   const std::string w = quality::Warnings(dir + "/r");
+  // ... and on stderr at the end of the run, with --quiet too.
+  std::string printed, line;
+  for (std::istringstream lines(err); std::getline(lines, line);)
+    if (line.rfind("quijibo: quality warning: ", 0) == 0) printed += line + "\n";
   for (const char* expect : {"the one-step set leaks", "the n = 3 set fills the box", "the n = 3 set leaks",
                              "the start is inverted", "the start is saturated",
-                             "one-step set does not follow the shape", "origin lies outside the shape"})
+                             "one-step set does not follow the shape", "origin lies outside the shape"}) {
     EXPECT_NE(w.find(expect), std::string::npos) << expect << " in\n" << w;
+    EXPECT_NE(printed.find(expect), std::string::npos) << expect << " in\n" << err;
+  }
   fs::remove_all(dir);
 }
 

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 #include <nlohmann/json.hpp>
 
 #include "experiments/pipeline/quality.h"
@@ -66,6 +67,46 @@ TEST(Quality, AGainOrALossWithinTheToleranceIsNotWarnedAbout) {
     EXPECT_FALSE(Warns(q, "worse on the target grid")) << q;
     fs::remove_all(dir);
   }
+}
+
+// Between "does not follow the shape" (IoU < 0.5) and a good fit (>= 0.8) the set follows the shape
+// coarsely; the warning says what the run's files suggest: more iterations when the last pass hit its
+// cap, the log-kernel start when the run began from the monopoles.
+TEST(Quality, ASetThatFollowsTheShapeOnlyCoarselyIsWarnedAboutWithWhatToDo) {
+  json fidelity = Fidelity(0.646, 0.654);
+  fidelity["one_step"]["iou"] = 0.656;
+  const std::string dir = FolderWithFidelity("quality_coarse", fidelity);
+  fs::create_directories(dir + "/optimized");
+  std::ofstream(dir + "/optimized/summary.json")
+      << json{{"passes", json::array({json{{"pass", "V"}, {"stop", "tolerance"}},
+                                      json{{"pass", "F"}, {"stop", "max-iterations"}}})}}.dump();
+  Experiment monopoles;
+  monopoles.initial.kind = "monopoles";
+  const json q = RunQuality(monopoles, dir);
+  EXPECT_TRUE(Warns(q, "the optimized map's one-step set follows the shape only coarsely: one-step IoU 0.656 "
+                       "(below 0.80")) << q;
+  EXPECT_TRUE(Warns(q, "stopped at its iteration cap")) << q;
+  EXPECT_TRUE(Warns(q, "the log-kernel start")) << q;
+  EXPECT_FALSE(Warns(q, "does not follow the shape")) << q;
+
+  // The log-kernel start, its last pass converged: the warning alone, no remedy that does not apply.
+  std::ofstream(dir + "/optimized/summary.json")
+      << json{{"passes", json::array({json{{"pass", "F"}, {"stop", "tolerance"}}})}}.dump();
+  const json k = RunQuality(Experiment{}, dir);
+  EXPECT_TRUE(Warns(k, "follows the shape only coarsely")) << k;
+  EXPECT_FALSE(Warns(k, "iteration cap")) << k;
+  EXPECT_FALSE(Warns(k, "log-kernel start")) << k;
+
+  // Above the bar no such warning; below 0.5 the stronger one instead.
+  for (const auto& [iou, coarse, lost] : {std::tuple{0.80, false, false}, std::tuple{0.95, false, false},
+                                          std::tuple{0.40, false, true}}) {
+    fidelity["one_step"]["iou"] = iou;
+    std::ofstream(dir + "/fidelity/fidelity.json") << fidelity.dump(1);
+    const json w = RunQuality(monopoles, dir);
+    EXPECT_EQ(Warns(w, "follows the shape only coarsely"), coarse) << iou << w;
+    EXPECT_EQ(Warns(w, "does not follow the shape"), lost) << iou << w;
+  }
+  fs::remove_all(dir);
 }
 
 // The unit sphere's distance on a cube of side `side` with `cells` cells per axis.
