@@ -6,6 +6,7 @@
 
 #include "experiments/pipeline/stage_cache.h"
 #include "monopole/kernel_fit.h"
+#include "optim/lbfgsb.h"
 
 namespace quijibo::pipeline {
 
@@ -69,7 +70,7 @@ std::string CoarseRemedy(const Experiment& e, const std::string& results) {
   std::string remedy;
   const json summary = ReadStageFile(results + "/optimized/summary.json");
   if (summary.is_object() && summary.contains("passes") && summary["passes"].is_array() && !summary["passes"].empty() &&
-      summary["passes"].back().value("stop", "") == "max-iterations")
+      summary["passes"].back().value("stop", "") == optim::StopReasonName(optim::StopReason::kMaxIterations))
     remedy += "; the last pass stopped at its iteration cap: a schedule with more iterations may go further";
   if (e.initial.kind == "monopoles")
     remedy += "; the paper's monopole start stops short of thin parts (docs/fidelity.md §12): the log-kernel start "
