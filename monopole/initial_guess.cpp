@@ -128,11 +128,11 @@ LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, d
   return out;
 }
 
-LnCScan ScanLevelByIou(const RationalMap& map, const ScalarGrid& sdf, double alpha) {
+namespace {
+
+// ScanLevelByIou on the field F sampled at the cells of `sdf`.
+LnCScan LevelByIou(const std::vector<double>& F, const ScalarGrid& sdf, double alpha) {
   const std::int64_t n = sdf.frame.cell_count();
-  std::vector<double> F(static_cast<std::size_t>(n));
-#pragma omp parallel for schedule(static)
-  for (std::int64_t c = 0; c < n; ++c) F[std::size_t(c)] = OneStepLogModulus(map, sdf.frame.cell_center(c));
   LnCScan out;
   // Cells on a top root (F = -inf) are in every set; NaN cells (a top and a bottom root) in none.
   std::vector<std::int64_t> order;
@@ -171,6 +171,89 @@ LnCScan ScanLevelByIou(const RationalMap& map, const ScalarGrid& sdf, double alp
   out.iou = best_iou;
   out.steepness = scale;
   out.ln_C = -scale * t;
+  return out;
+}
+
+// The group's field at the cells of `sdf`: sum log|q - t| over its top roots minus its bottom roots'.
+std::vector<double> GroupField(const RationalMap& map, const RootGroup& g, const ScalarGrid& sdf) {
+  const std::int64_t n = sdf.frame.cell_count();
+  std::vector<double> f(static_cast<std::size_t>(n), 0.0);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < n; ++c) {
+    const Vec3 p = sdf.frame.cell_center(c);
+    double s = 0;
+    for (int i = g.top_begin; i < g.top_end; ++i) s += LogDistance(p, map.top_roots[std::size_t(i)]);
+    for (int i = g.bottom_begin; i < g.bottom_end; ++i) s -= LogDistance(p, map.bottom_roots[std::size_t(i)]);
+    f[std::size_t(c)] = s;
+  }
+  return f;
+}
+
+}  // namespace
+
+LnCScan ScanLevelByIou(const RationalMap& map, const ScalarGrid& sdf, double alpha) {
+  const std::int64_t n = sdf.frame.cell_count();
+  std::vector<double> F(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < n; ++c) F[std::size_t(c)] = OneStepLogModulus(map, sdf.frame.cell_center(c));
+  return LevelByIou(F, sdf, alpha);
+}
+
+OffsetExponentScan ScanOffsetExponents(RationalMap& map, const ScalarGrid& sdf, const RootGroup& hollow,
+                                       const RootGroup& attract, double alpha) {
+  if (!(map.tau > 0) || map.tau != map.beta) throw Error("offset exponent scan: the start must have tau = beta > 0");
+  OffsetExponentScan out;
+  out.hollow = hollow.size();
+  out.attract = attract.size();
+  const std::int64_t n = sdf.frame.cell_count();
+  // The start's field in exponent units: F0 = L / tau (the offset roots are at exponent 0 in it).
+  std::vector<double> F0(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < n; ++c) F0[std::size_t(c)] = OneStepLogModulus(map, sdf.frame.cell_center(c)) / map.tau;
+  const LnCScan start = LevelByIou(F0, sdf, alpha);
+  out.iou_before = out.iou = start.iou;
+  if (out.hollow == 0 && out.attract == 0) return out;
+  // The scale of an exponent: the mean of the start's nonzero ones.
+  double sum = 0;
+  int count = 0;
+  for (double e : map.top_exponents)
+    if (e > 0) sum += e, ++count;
+  for (double e : map.bottom_exponents)
+    if (e > 0) sum += e, ++count;
+  const double unit = count > 0 ? sum / count : 1.0;
+  const std::vector<double> A = GroupField(map, attract, sdf);
+  const std::vector<double> H = GroupField(map, hollow, sdf);
+  std::vector<double> values{0.0};
+  for (int k = -10; k <= 6; ++k) values.push_back(unit * std::ldexp(1.0, k));
+  std::vector<double> F(F0.size());
+  auto evaluate = [&](double a, double h) {
+    for (std::size_t c = 0; c < F.size(); ++c) F[c] = F0[c] + a * A[c] - h * H[c];
+    return LevelByIou(F, sdf, alpha);
+  };
+  LnCScan best = start;
+  // Coordinate search: the attract roots' exponent, then the hollow roots', twice.
+  for (int round = 0; round < 2; ++round) {
+    for (int which = 0; which < 2; ++which) {
+      if ((which == 0 ? out.attract : out.hollow) == 0) continue;
+      for (double v : values) {
+        const double a = which == 0 ? v : out.attract_exponent;
+        const double h = which == 0 ? out.hollow_exponent : v;
+        const LnCScan s = evaluate(a, h);
+        if (s.iou > best.iou) best = s, out.attract_exponent = a, out.hollow_exponent = h;
+      }
+    }
+  }
+  out.iou = best.iou;
+  auto set = [&](const RootGroup& g, double e) {
+    for (int i = g.top_begin; i < g.top_end; ++i) map.top_exponents[std::size_t(i)] = e;
+    for (int i = g.bottom_begin; i < g.bottom_end; ++i) map.bottom_exponents[std::size_t(i)] = e;
+  };
+  set(attract, out.attract_exponent);
+  set(hollow, out.hollow_exponent);
+  // The scan's level t is of F, which holds ln C / tau: L = s (F - t) = s (sum ... + ln C / tau - t).
+  const double ln_C_over_tau = map.ln_C / map.tau;
+  map.tau = map.beta = best.steepness;
+  map.ln_C = best.ln_C + best.steepness * ln_C_over_tau;
   return out;
 }
 

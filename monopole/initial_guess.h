@@ -73,6 +73,10 @@ struct InitialGuessOptions {
   static constexpr ValueRange kAttractRootsRange{0, 4000};
   double attract_offset_cells = 2.0;
   static constexpr ValueRange kAttractOffsetRange{0.0, 20.0};
+  // With `scan` kIou: the hollow roots and the attract roots start at one common exponent each, the
+  // pair whose start has the best one-step IoU (ScanOffsetExponents), not at 0. At 0 a root far from
+  // the start's set has no gradient once the V pass steepens L (docs/fidelity.md §12).
+  bool offset_scan = true;
   std::string Validate() const;
 };
 
@@ -111,6 +115,27 @@ int AddHollowRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Ve
 // how many were added.
 int AddAttractRoots(RationalMap& map, const ScalarGrid& sdf, const std::vector<Vec3>& surface,
                     const InitialGuessOptions& options);
+
+// Roots added to a map together: top roots [top_begin, top_end) and bottom roots [bottom_begin, bottom_end).
+struct RootGroup {
+  int top_begin = 0, top_end = 0, bottom_begin = 0, bottom_end = 0;
+  int size() const { return top_end - top_begin + bottom_end - bottom_begin; }
+};
+
+struct OffsetExponentScan {
+  int hollow = 0, attract = 0;       // the offset roots scanned
+  double hollow_exponent = 0, attract_exponent = 0;  // their common exponents chosen
+  double iou_before = 0, iou = 0;    // the start's best one-step IoU before and after
+};
+
+// The hollow roots (bottom roots from index `hollow_begin` on) and the attract roots (top roots
+// from `attract_begin` on) of the start `map` (tau = beta, as InitialMap makes it) get one common
+// exponent each, chosen with the level of L as ScanLevelByIou does: the pair with the best one-step
+// IoU on the grid of `sdf` (0 and the mean nonzero exponent times 2^-10 .. 2^0, a coordinate
+// search). Exponent 0 is among the candidates, so the start's IoU never falls. Sets the exponents,
+// ln C and tau = beta = the steepness of the chosen set.
+OffsetExponentScan ScanOffsetExponents(RationalMap& map, const ScalarGrid& sdf, const RootGroup& hollow,
+                                       const RootGroup& attract, double alpha);
 
 // The reference's 1-D scan for ln C of `map` (its exponents, tau = beta = 1 as given).
 LnCScan ScanLnC(const RationalMap& map, const ScalarGrid& sdf, int resolution, double alpha);

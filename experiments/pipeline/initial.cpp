@@ -189,6 +189,16 @@ void AddMonopoleSettings(Schema<O>& s) {
           [](auto& o) -> double& { return o.guess.attract_offset_cells; },
           monopole::InitialGuessOptions::kAttractOffsetRange)
       .When(Kind({"monopoles"}))
+      .Boolean("offset_scan", "--no-offset-scan",
+               "monopoles: the hollow and the attract roots start at one common exponent each, the pair whose start "
+               "has the best one-step IoU (`--no-offset-scan`: at exponent 0)",
+               [](auto& o) -> bool& { return o.guess.offset_scan; })
+      .Doc("monopoles, with `scan` `iou`: the hollow roots and the attract roots start at one common exponent "
+           "each (0 or the mean monopole exponent times 2^-10 .. 2^6), the pair whose start has the best one-step "
+           "IoU on the target grid, with ln C and the steepness scanned again; at exponent 0 a root the V pass "
+           "leaves far from the set has no gradient to grow from (`--no-offset-scan`: at 0; "
+           "[fidelity.md](fidelity.md) §12)")
+      .When(Kind({"monopoles"}))
       .Enum(
           "scan", "--start-scan",
           "monopoles: iou (the level of the monopoles' field with the best one-step IoU, made as steep as the "
@@ -402,13 +412,20 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
   monopole::LnCScan scan;
   RationalMap map = monopole::InitialMap(mono.monopoles, target.frame, target.grid, o.guess, &scan);
   int hollow = 0, attract = 0;
+  monopole::OffsetExponentScan offset;
   if (o.guess.hollow_roots > 0 || o.guess.attract_roots > 0) {
     monopole::SamplingOptions so = mo.sampling;
     so.count = std::max(2000, 10 * std::max(o.guess.hollow_roots, o.guess.attract_roots));
     const std::vector<Vec3> surface = monopole::PoissonDiskSample(target.mesh.vertices, target.mesh.triangles, so);
     // Roots of exponent 0 leave L as it is, so the order of the two does not change which are chosen.
+    monopole::RootGroup hg{map.top_count(), 0, map.bottom_count(), 0};
     hollow = monopole::AddHollowRoots(map, target.grid, surface, o.guess);
+    hg.top_end = map.top_count(), hg.bottom_end = map.bottom_count();
+    monopole::RootGroup ag{map.top_count(), 0, map.bottom_count(), 0};
     attract = monopole::AddAttractRoots(map, target.grid, surface, o.guess);
+    ag.top_end = map.top_count(), ag.bottom_end = map.bottom_count();
+    if (o.guess.offset_scan && o.guess.scan == monopole::StartScan::kIou)
+      offset = monopole::ScanOffsetExponents(map, target.grid, hg, ag, o.guess.alpha);
   }
   scan_seconds = Since(t1);
   map.provenance = {{"made_by", "quijibo monopoles"},
@@ -425,7 +442,12 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
                     {"both_signs", o.guess.both_signs},
                     {"hollow_roots", hollow},
                     {"attract_roots", attract},
-                    {"steepness", scan.steepness},
+                    {"offset_scan",
+                     {{"hollow_exponent", offset.hollow_exponent},
+                      {"attract_exponent", offset.attract_exponent},
+                      {"iou_before", offset.iou_before},
+                      {"iou", offset.iou}}},
+                    {"steepness", map.tau},
                     {"relative_residual", mono.fit.final_relative_residual},
                     {"monopoles", mono.monopoles.size()}};
   return map;

@@ -167,6 +167,65 @@ TEST(InitialGuess, AttractRootsGoWhereTheSetFallsShortOfTheShape) {
   EXPECT_THROW(AddAttractRoots(thin, sdf, surface, o), Error);
 }
 
+// The one-step IoU of {L < 0} against {sdf < 0} on the cells of `sdf`.
+double OneStepIou(const RationalMap& m, const ScalarGrid& sdf) {
+  std::int64_t both = 0, either = 0;
+  for (std::int64_t c = 0; c < sdf.frame.cell_count(); ++c) {
+    const bool in_set = OneStepLogModulus(m, sdf.frame.cell_center(c)) < 0, in_shape = sdf.values[std::size_t(c)] < 0;
+    both += in_set && in_shape;
+    either += in_set || in_shape;
+  }
+  return double(both) / double(either);
+}
+
+// The offset roots' common exponents: a start that falls short on one side and spills on the other
+// (a ball off the sphere's centre) is pulled onto the shape by its attract and hollow roots.
+TEST(InitialGuess, OffsetScanStartsTheOffsetRootsWhereTheSetFollowsTheShapeBetter) {
+  const ScalarGrid sdf = Sphere(1.0);
+  RationalMap m;
+  m.top_roots = {Vec4{-0.4, 0.0, 0.0, 0.0}};
+  m.top_exponents = {1.0};
+  m.ln_C = -std::log(0.9);
+  InitialGuessOptions o;
+  o.attract_roots = o.hollow_roots = 40;
+  RootGroup hollow{m.top_count(), 0, m.bottom_count(), 0};
+  AddHollowRoots(m, sdf, PointsOnUnitSphere(), o);
+  hollow.top_end = m.top_count(), hollow.bottom_end = m.bottom_count();
+  RootGroup attract{m.top_count(), 0, m.bottom_count(), 0};
+  AddAttractRoots(m, sdf, PointsOnUnitSphere(), o);
+  attract.top_end = m.top_count(), attract.bottom_end = m.bottom_count();
+  ASSERT_GT(hollow.size(), 0);
+  ASSERT_GT(attract.size(), 0);
+  const double before = OneStepIou(m, sdf);
+  const OffsetExponentScan s = ScanOffsetExponents(m, sdf, hollow, attract, 10.0);
+  EXPECT_EQ(s.hollow, hollow.size());
+  EXPECT_EQ(s.attract, attract.size());
+  EXPECT_GE(s.iou_before, before);  // the level rescanned: at least the given one's
+  EXPECT_GT(s.iou, s.iou_before + 0.03);
+  EXPECT_GT(s.attract_exponent + s.hollow_exponent, 0.0);
+  for (int i = attract.top_begin; i < attract.top_end; ++i) EXPECT_EQ(m.top_exponents[std::size_t(i)], s.attract_exponent);
+  for (int i = hollow.bottom_begin; i < hollow.bottom_end; ++i)
+    EXPECT_EQ(m.bottom_exponents[std::size_t(i)], s.hollow_exponent);
+  EXPECT_EQ(m.tau, m.beta);
+  EXPECT_NEAR(OneStepIou(m, sdf), s.iou, 1e-12);  // the map is the scanned set, its level and steepness
+
+  // Roots that can only pull the set off the shape (all on one side, outside it) stay at 0, and the
+  // start's set is kept.
+  RationalMap ball = testing::BallMap(1.0);
+  RootGroup far{1, 6, 0, 0};
+  for (int i = 0; i < 5; ++i) {
+    ball.top_roots.push_back(Vec4{1.6, -0.2 + 0.1 * i, 0.0, 0.0});
+    ball.top_exponents.push_back(0.0);
+  }
+  const double ball_iou = OneStepIou(ball, sdf);
+  const OffsetExponentScan none = ScanOffsetExponents(ball, sdf, RootGroup{}, far, 10.0);
+  EXPECT_EQ(none.attract_exponent, 0.0);
+  EXPECT_EQ(none.iou, none.iou_before);
+  EXPECT_NEAR(OneStepIou(ball, sdf), ball_iou, 1e-12);
+  ball.beta = 2.0;
+  EXPECT_THROW(ScanOffsetExponents(ball, sdf, RootGroup{}, far, 10.0), Error);
+}
+
 TEST(InitialGuess, ScanPutsTheZeroLevelOnTheSphere) {
   // One top root at the centre: L = ln C + ln|q|, zero on |q| = e^{-ln C}. The scan must find
   // ln C = -ln a to within a scan cell.
