@@ -1,6 +1,8 @@
 #include "monopole/initial_guess.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <limits>
 
@@ -174,7 +176,8 @@ LnCScan LevelByIou(const std::vector<double>& F, const ScalarGrid& sdf, double a
   return out;
 }
 
-// The group's field at the cells of `sdf`: sum log|q - t| over its top roots minus its bottom roots'.
+// What one unit of the group's common exponent adds to L / tau (tau = beta) at the cells of `sdf`:
+// log|q - t| summed over its top roots minus the sum over its bottom roots.
 std::vector<double> GroupField(const RationalMap& map, const RootGroup& g, const ScalarGrid& sdf) {
   const std::int64_t n = sdf.frame.cell_count();
   std::vector<double> f(static_cast<std::size_t>(n), 0.0);
@@ -227,7 +230,7 @@ OffsetExponentScan ScanOffsetExponents(RationalMap& map, const ScalarGrid& sdf, 
   for (int k = -10; k <= 6; ++k) values.push_back(unit * std::ldexp(1.0, k));
   std::vector<double> F(F0.size());
   auto evaluate = [&](double a, double h) {
-    for (std::size_t c = 0; c < F.size(); ++c) F[c] = F0[c] + a * A[c] - h * H[c];
+    for (std::size_t c = 0; c < F.size(); ++c) F[c] = F0[c] + a * A[c] + h * H[c];
     return LevelByIou(F, sdf, alpha);
   };
   LnCScan best = start;
@@ -239,6 +242,7 @@ OffsetExponentScan ScanOffsetExponents(RationalMap& map, const ScalarGrid& sdf, 
         const double a = which == 0 ? v : out.attract_exponent;
         const double h = which == 0 ? out.hollow_exponent : v;
         const LnCScan s = evaluate(a, h);
+        if (std::getenv("QJB_DEBUG")) std::fprintf(stderr, "scan a %.5g h %.5g (unit %.4g) iou %.4f steep %.4g\n", a, h, unit, s.iou, s.steepness);
         if (s.iou > best.iou) best = s, out.attract_exponent = a, out.hollow_exponent = h;
       }
     }

@@ -202,12 +202,26 @@ TEST(InitialGuess, OffsetScanStartsTheOffsetRootsWhereTheSetFollowsTheShapeBette
   EXPECT_EQ(s.attract, attract.size());
   EXPECT_GE(s.iou_before, before);  // the level rescanned: at least the given one's
   EXPECT_GT(s.iou, s.iou_before + 0.03);
-  EXPECT_GT(s.attract_exponent + s.hollow_exponent, 0.0);
+  EXPECT_GT(s.attract_exponent, 0.0);
   for (int i = attract.top_begin; i < attract.top_end; ++i) EXPECT_EQ(m.top_exponents[std::size_t(i)], s.attract_exponent);
   for (int i = hollow.bottom_begin; i < hollow.bottom_end; ++i)
     EXPECT_EQ(m.bottom_exponents[std::size_t(i)], s.hollow_exponent);
   EXPECT_EQ(m.tau, m.beta);
   EXPECT_NEAR(OneStepIou(m, sdf), s.iou, 1e-12);  // the map is the scanned set, its level and steepness
+
+  // Hollow roots alone: a ball that spills out on one side is carved back by its bottom roots.
+  RationalMap fat;
+  fat.top_roots = {Vec4{0.4, 0.0, 0.0, 0.0}};
+  fat.top_exponents = {1.0};
+  fat.ln_C = -std::log(1.0);
+  RootGroup spill{1, 1, 0, 0};
+  AddHollowRoots(fat, sdf, PointsOnUnitSphere(), o);
+  spill.bottom_end = fat.bottom_count();
+  ASSERT_GT(spill.size(), 0);
+  const OffsetExponentScan carved = ScanOffsetExponents(fat, sdf, spill, RootGroup{}, 10.0);
+  EXPECT_GT(carved.hollow_exponent, 0.0);
+  EXPECT_GT(carved.iou, carved.iou_before + 0.03);
+  EXPECT_NEAR(OneStepIou(fat, sdf), carved.iou, 1e-12);
 
   // Roots that can only pull the set off the shape (all on one side, outside it) stay at 0, and the
   // start's set is kept.
