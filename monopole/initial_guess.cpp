@@ -1,8 +1,6 @@
 #include "monopole/initial_guess.h"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <limits>
 
@@ -242,7 +240,6 @@ OffsetExponentScan ScanOffsetExponents(RationalMap& map, const ScalarGrid& sdf, 
         const double a = which == 0 ? v : out.attract_exponent;
         const double h = which == 0 ? out.hollow_exponent : v;
         const LnCScan s = evaluate(a, h);
-        if (std::getenv("QJB_DEBUG")) std::fprintf(stderr, "scan a %.5g h %.5g (unit %.4g) iou %.4f steep %.4g\n", a, h, unit, s.iou, s.steepness);
         if (s.iou > best.iou) best = s, out.attract_exponent = a, out.hollow_exponent = h;
       }
     }
