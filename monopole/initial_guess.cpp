@@ -211,8 +211,8 @@ OffsetExponentScan ScanOffsetExponents(RationalMap& map, const ScalarGrid& sdf, 
   std::vector<double> F0(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static)
   for (std::int64_t c = 0; c < n; ++c) F0[std::size_t(c)] = OneStepLogModulus(map, sdf.frame.cell_center(c)) / map.tau;
-  const LnCScan start = LevelByIou(F0, sdf, alpha);
-  out.iou_before = out.iou = start.iou;
+  LnCScan best = LevelByIou(F0, sdf, alpha);
+  out.iou_before = out.iou = best.iou;
   if (out.hollow == 0 && out.attract == 0) return out;
   // The scale of an exponent: the mean of the start's nonzero ones.
   double sum = 0;
@@ -222,35 +222,24 @@ OffsetExponentScan ScanOffsetExponents(RationalMap& map, const ScalarGrid& sdf, 
   for (double e : map.bottom_exponents)
     if (e > 0) sum += e, ++count;
   const double unit = count > 0 ? sum / count : 1.0;
-  const std::vector<double> A = GroupField(map, attract, sdf);
+  // Both groups' fields together: at one exponent the hollow (bottom) and attract (top) roots'
+  // far fields, sums of logs of about the same distances with opposite signs, nearly cancel, so
+  // the roots reshape the set near the surface and leave the monopoles' field elsewhere as it is.
+  std::vector<double> G = GroupField(map, attract, sdf);
   const std::vector<double> H = GroupField(map, hollow, sdf);
-  std::vector<double> values{0.0};
-  for (int k = -10; k <= 6; ++k) values.push_back(unit * std::ldexp(1.0, k));
+  for (std::size_t c = 0; c < G.size(); ++c) G[c] += H[c];
   std::vector<double> F(F0.size());
-  auto evaluate = [&](double a, double h) {
-    for (std::size_t c = 0; c < F.size(); ++c) F[c] = F0[c] + a * A[c] + h * H[c];
-    return LevelByIou(F, sdf, alpha);
-  };
-  LnCScan best = start;
-  // Coordinate search: the attract roots' exponent, then the hollow roots', twice.
-  for (int round = 0; round < 2; ++round) {
-    for (int which = 0; which < 2; ++which) {
-      if ((which == 0 ? out.attract : out.hollow) == 0) continue;
-      for (double v : values) {
-        const double a = which == 0 ? v : out.attract_exponent;
-        const double h = which == 0 ? out.hollow_exponent : v;
-        const LnCScan s = evaluate(a, h);
-        if (s.iou > best.iou) best = s, out.attract_exponent = a, out.hollow_exponent = h;
-      }
-    }
+  for (int k = -10; k <= 6; ++k) {
+    const double e = unit * std::ldexp(1.0, k);
+    for (std::size_t c = 0; c < F.size(); ++c) F[c] = F0[c] + e * G[c];
+    const LnCScan s = LevelByIou(F, sdf, alpha);
+    if (s.iou > best.iou) best = s, out.exponent = e;
   }
   out.iou = best.iou;
-  auto set = [&](const RootGroup& g, double e) {
-    for (int i = g.top_begin; i < g.top_end; ++i) map.top_exponents[std::size_t(i)] = e;
-    for (int i = g.bottom_begin; i < g.bottom_end; ++i) map.bottom_exponents[std::size_t(i)] = e;
-  };
-  set(attract, out.attract_exponent);
-  set(hollow, out.hollow_exponent);
+  for (const RootGroup* g : {&hollow, &attract}) {
+    for (int i = g->top_begin; i < g->top_end; ++i) map.top_exponents[std::size_t(i)] = out.exponent;
+    for (int i = g->bottom_begin; i < g->bottom_end; ++i) map.bottom_exponents[std::size_t(i)] = out.exponent;
+  }
   // The scan's level t is of F, which holds ln C / tau: L = s (F - t) = s (sum ... + ln C / tau - t).
   const double ln_C_over_tau = map.ln_C / map.tau;
   map.tau = map.beta = best.steepness;

@@ -73,9 +73,9 @@ struct InitialGuessOptions {
   static constexpr ValueRange kAttractRootsRange{0, 4000};
   double attract_offset_cells = 2.0;
   static constexpr ValueRange kAttractOffsetRange{0.0, 20.0};
-  // With `scan` kIou: the hollow roots and the attract roots start at one common exponent each, the
-  // pair whose start has the best one-step IoU (ScanOffsetExponents), not at 0. At 0 a root far from
-  // the start's set has no gradient once the V pass steepens L (docs/fidelity.md §12).
+  // With `scan` kIou: the hollow and attract roots start at one common exponent, the one whose start
+  // has the best one-step IoU (ScanOffsetExponents), not at 0, where a root far from the start's set
+  // has no gradient once the V pass steepens L (docs/fidelity.md §12).
   bool offset_scan = true;
   std::string Validate() const;
 };
@@ -123,17 +123,17 @@ struct RootGroup {
 };
 
 struct OffsetExponentScan {
-  int hollow = 0, attract = 0;       // the offset roots scanned
-  double hollow_exponent = 0, attract_exponent = 0;  // their common exponents chosen
-  double iou_before = 0, iou = 0;    // the start's best one-step IoU before and after
+  int hollow = 0, attract = 0;    // the offset roots scanned
+  double exponent = 0;            // their common exponent chosen
+  double iou_before = 0, iou = 0; // the start's best one-step IoU with the offset roots at 0, and at `exponent`
 };
 
-// The hollow roots (bottom roots from index `hollow_begin` on) and the attract roots (top roots
-// from `attract_begin` on) of the start `map` (tau = beta, as InitialMap makes it) get one common
-// exponent each, chosen with the level of L as ScanLevelByIou does: the pair with the best one-step
-// IoU on the grid of `sdf` (0 and the mean nonzero exponent times 2^-10 .. 2^0, a coordinate
-// search). Exponent 0 is among the candidates, so the start's IoU never falls. Sets the exponents,
-// ln C and tau = beta = the steepness of the chosen set.
+// The hollow roots (`hollow`: bottom roots where the start spills) and the attract roots (`attract`:
+// top roots where it falls short) of the start `map` (tau = beta, as InitialMap makes it) get one
+// common exponent, chosen with the level of L as ScanLevelByIou does: the one whose start has the
+// best one-step IoU on the grid of `sdf`, among 0 and the mean nonzero exponent times 2^-10 .. 2^6.
+// Exponent 0 is a candidate, so the start's IoU never falls. Sets the exponents, ln C and tau = beta
+// = the steepness of the chosen set.
 OffsetExponentScan ScanOffsetExponents(RationalMap& map, const ScalarGrid& sdf, const RootGroup& hollow,
                                        const RootGroup& attract, double alpha);
 

@@ -190,14 +190,13 @@ void AddMonopoleSettings(Schema<O>& s) {
           monopole::InitialGuessOptions::kAttractOffsetRange)
       .When(Kind({"monopoles"}))
       .Boolean("offset_scan", "--no-offset-scan",
-               "monopoles: the hollow and the attract roots start at one common exponent each, the pair whose start "
-               "has the best one-step IoU (`--no-offset-scan`: at exponent 0)",
+               "monopoles: the hollow and the attract roots start at the common exponent whose start has the best "
+               "one-step IoU (`--no-offset-scan`: at exponent 0)",
                [](auto& o) -> bool& { return o.guess.offset_scan; })
-      .Doc("monopoles, with `scan` `iou`: the hollow roots and the attract roots start at one common exponent "
-           "each (0 or the mean monopole exponent times 2^-10 .. 2^6), the pair whose start has the best one-step "
-           "IoU on the target grid, with ln C and the steepness scanned again; at exponent 0 a root the V pass "
-           "leaves far from the set has no gradient to grow from (`--no-offset-scan`: at 0; "
-           "[fidelity.md](fidelity.md) §12)")
+      .Doc("monopoles, with `scan` `iou`: the hollow and the attract roots start at one common exponent (0 or "
+           "the mean monopole exponent times 2^-10 .. 2^6), the one whose start has the best one-step IoU on the "
+           "target grid, with ln C and the steepness scanned again; at exponent 0 a root the V pass leaves far "
+           "from the set has no gradient to grow from (`--no-offset-scan`: at 0; [fidelity.md](fidelity.md) §12)")
       .When(Kind({"monopoles"}))
       .Enum(
           "scan", "--start-scan",
@@ -413,6 +412,7 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
   RationalMap map = monopole::InitialMap(mono.monopoles, target.frame, target.grid, o.guess, &scan);
   int hollow = 0, attract = 0;
   monopole::OffsetExponentScan offset;
+  bool scanned = false;
   if (o.guess.hollow_roots > 0 || o.guess.attract_roots > 0) {
     monopole::SamplingOptions so = mo.sampling;
     so.count = std::max(2000, 10 * std::max(o.guess.hollow_roots, o.guess.attract_roots));
@@ -424,8 +424,8 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
     monopole::RootGroup ag{map.top_count(), 0, map.bottom_count(), 0};
     attract = monopole::AddAttractRoots(map, target.grid, surface, o.guess);
     ag.top_end = map.top_count(), ag.bottom_end = map.bottom_count();
-    if (o.guess.offset_scan && o.guess.scan == monopole::StartScan::kIou)
-      offset = monopole::ScanOffsetExponents(map, target.grid, hg, ag, o.guess.alpha);
+    scanned = o.guess.offset_scan && o.guess.scan == monopole::StartScan::kIou;
+    if (scanned) offset = monopole::ScanOffsetExponents(map, target.grid, hg, ag, o.guess.alpha);
   }
   scan_seconds = Since(t1);
   map.provenance = {{"made_by", "quijibo monopoles"},
@@ -442,14 +442,12 @@ RationalMap FitMonopoleMap(const TargetResult& target, const O& o, monopole::Mon
                     {"both_signs", o.guess.both_signs},
                     {"hollow_roots", hollow},
                     {"attract_roots", attract},
-                    {"offset_scan",
-                     {{"hollow_exponent", offset.hollow_exponent},
-                      {"attract_exponent", offset.attract_exponent},
-                      {"iou_before", offset.iou_before},
-                      {"iou", offset.iou}}},
                     {"steepness", map.tau},
                     {"relative_residual", mono.fit.final_relative_residual},
                     {"monopoles", mono.monopoles.size()}};
+  if (scanned)
+    map.provenance["offset_scan"] = {
+        {"exponent", offset.exponent}, {"iou_before", offset.iou_before}, {"iou", offset.iou}};
   return map;
 }
 
@@ -514,6 +512,9 @@ json FitSummary(const TargetResult& target, const O& o, const RationalMap& map, 
                 {"shell_points", mono.shell_points},
                 {"candidates", mono.candidates},
                 {"bem_elements", mono.bem.elements}});
+  // The hollow and attract roots and their common exponents (FitMonopoleMap's provenance).
+  for (const char* key : {"hollow_roots", "attract_roots", "offset_scan"})
+    if (map.provenance.contains(key)) s[key] = map.provenance[key];
   s["seconds"] = {{"sdf", target.sdf_seconds},         {"bem", mono.seconds.bem},
                   {"shell", mono.seconds.shell},       {"potential", mono.seconds.potential},
                   {"sampling", mono.seconds.sampling}, {"fit", mono.seconds.fit},

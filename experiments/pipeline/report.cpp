@@ -53,6 +53,18 @@ void InitialSection(Page& page) {
        << ") | "
        << Fixed(monopoles.value("relative_residual", 0.0), 4) << " | " << monopoles.value("bem_elements", 0) << " | "
        << Fixed(monopoles.value("ln_C", 0.0), 3) << " |\n\n";
+    const int hollow = monopoles.value("hollow_roots", 0), attract = monopoles.value("attract_roots", 0);
+    if (hollow + attract > 0) {
+      md << hollow << " hollow roots (bottom, outside where the start spills) and " << attract
+         << " attract roots (top, inside where it falls short)";
+      const json scan = monopoles.value("offset_scan", json());
+      if (scan.is_object() && scan.value("iou", 0.0) > 0)
+        md << ", starting at the common exponent " << Fixed(scan.value("exponent", 0.0), 4)
+           << ": the start's one-step IoU on the target grid "
+           << Fixed(scan.value("iou_before", 0.0), 3) << " at exponent 0, " << Fixed(scan.value("iou", 0.0), 3)
+           << " (`offset_scan`)";
+      md << ".\n\n";
+    }
   } else if (page.Exists("initial/map.json")) {
     const RationalMap map = ReadMap(page.Path("initial/map.json"));
     md << "## Initial map\n\n"

@@ -178,7 +178,7 @@ double OneStepIou(const RationalMap& m, const ScalarGrid& sdf) {
   return double(both) / double(either);
 }
 
-// The offset roots' common exponents: a start that falls short on one side and spills on the other
+// The offset roots' common exponent: a start that falls short on one side and spills on the other
 // (a ball off the sphere's centre) is pulled onto the shape by its attract and hollow roots.
 TEST(InitialGuess, OffsetScanStartsTheOffsetRootsWhereTheSetFollowsTheShapeBetter) {
   const ScalarGrid sdf = Sphere(1.0);
@@ -202,10 +202,10 @@ TEST(InitialGuess, OffsetScanStartsTheOffsetRootsWhereTheSetFollowsTheShapeBette
   EXPECT_EQ(s.attract, attract.size());
   EXPECT_GE(s.iou_before, before);  // the level rescanned: at least the given one's
   EXPECT_GT(s.iou, s.iou_before + 0.03);
-  EXPECT_GT(s.attract_exponent, 0.0);
-  for (int i = attract.top_begin; i < attract.top_end; ++i) EXPECT_EQ(m.top_exponents[std::size_t(i)], s.attract_exponent);
+  EXPECT_GT(s.exponent, 0.0);
+  for (int i = attract.top_begin; i < attract.top_end; ++i) EXPECT_EQ(m.top_exponents[std::size_t(i)], s.exponent);
   for (int i = hollow.bottom_begin; i < hollow.bottom_end; ++i)
-    EXPECT_EQ(m.bottom_exponents[std::size_t(i)], s.hollow_exponent);
+    EXPECT_EQ(m.bottom_exponents[std::size_t(i)], s.exponent);
   EXPECT_EQ(m.tau, m.beta);
   EXPECT_NEAR(OneStepIou(m, sdf), s.iou, 1e-12);  // the map is the scanned set, its level and steepness
 
@@ -219,7 +219,7 @@ TEST(InitialGuess, OffsetScanStartsTheOffsetRootsWhereTheSetFollowsTheShapeBette
   spill.bottom_end = fat.bottom_count();
   ASSERT_GT(spill.size(), 0);
   const OffsetExponentScan carved = ScanOffsetExponents(fat, sdf, spill, RootGroup{}, 10.0);
-  EXPECT_GT(carved.hollow_exponent, 0.0);
+  EXPECT_GT(carved.exponent, 0.0);
   EXPECT_GT(carved.iou, carved.iou_before + 0.03);
   EXPECT_NEAR(OneStepIou(fat, sdf), carved.iou, 1e-12);
 
@@ -233,7 +233,7 @@ TEST(InitialGuess, OffsetScanStartsTheOffsetRootsWhereTheSetFollowsTheShapeBette
   }
   const double ball_iou = OneStepIou(ball, sdf);
   const OffsetExponentScan none = ScanOffsetExponents(ball, sdf, RootGroup{}, far, 10.0);
-  EXPECT_EQ(none.attract_exponent, 0.0);
+  EXPECT_EQ(none.exponent, 0.0);
   EXPECT_EQ(none.iou, none.iou_before);
   EXPECT_NEAR(OneStepIou(ball, sdf), ball_iou, 1e-12);
   ball.beta = 2.0;
