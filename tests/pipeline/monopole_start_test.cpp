@@ -92,11 +92,24 @@ TEST(MonopoleStart, TheSphereGetsAConvergedUprightStart) {
   // The IoU scan (the default) starts unsaturated, with the best one-step IoU of the monopoles'
   // sets: at least the reference scan's, whose amplitude saturates the start.
   EXPECT_LT(r.summary.at("start").at("saturated_fraction").get<double>(), 0.1);
+  // The hollow and attract roots' common exponent: the start's IoU at it is the start check's, and
+  // at least the IoU with them at 0; without the scan (or with the reference scan) they stay at 0.
+  ASSERT_TRUE(r.summary.contains("offset_scan"));
+  const nlohmann::json& scan = r.summary.at("offset_scan");
+  EXPECT_GE(scan.at("exponent").get<double>(), 0.0);
+  EXPECT_GE(scan.at("iou").get<double>(), scan.at("iou_before").get<double>());
+  EXPECT_NEAR(scan.at("iou").get<double>(), r.summary.at("start").at("iou").get<double>(), 1e-9);
+  o.guess.offset_scan = false;
+  const InitialGuessResult unscanned = InitialGuess(target, o);
+  EXPECT_FALSE(unscanned.summary.contains("offset_scan"));
+  EXPECT_NEAR(unscanned.summary.at("start").at("iou").get<double>(), scan.at("iou_before").get<double>(), 1e-9);
+  o.guess.offset_scan = true;
   o.guess.scan = monopole::StartScan::kReference;
   const InitialGuessResult ref = InitialGuess(target, o);
   EXPECT_GE(r.summary.at("start").at("iou").get<double>(), ref.summary.at("start").at("iou").get<double>() - 1e-3);
   EXPECT_GT(ref.summary.at("start").at("saturated_fraction").get<double>(),
             r.summary.at("start").at("saturated_fraction").get<double>());
+  EXPECT_FALSE(ref.summary.contains("offset_scan"));
 }
 
 }  // namespace
