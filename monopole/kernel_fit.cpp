@@ -451,4 +451,23 @@ StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alph
   return check;
 }
 
+double StartEnergyBetweenNodes(const RationalMap& map, const ScalarGrid& sdf, double alpha) {
+  const EnergyGrid nodes = MakeEnergyGrid(sdf, kDefaultWeightField);
+  const EnergyGrid corners = CornerGrid(sdf, kDefaultWeightField, nodes);
+  // Each cell's term first, summed in order after: the same sum on any number of threads.
+  auto sum = [&](const EnergyGrid& g) {
+    const std::int64_t n = g.frame.cell_count();
+    std::vector<double> term(static_cast<std::size_t>(n), 0.0);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t c = 0; c < n; ++c) {
+      const double L = OneStepLogModulus(map, g.frame.cell_center(c), g.slice);
+      if (std::isfinite(L)) term[std::size_t(c)] = -std::tanh(alpha * L) * g.weight[std::size_t(c)];
+    }
+    double s = 0;
+    for (double t : term) s += t;
+    return s;
+  };
+  return (sum(nodes) + sum(corners)) / (nodes.eta + corners.eta) - TrivialSetEnergy({&nodes, &corners});
+}
+
 }  // namespace quijibo::monopole

@@ -352,15 +352,22 @@ MonopoleStartVerdict JudgeMonopoleStart(const monopole::GreedyFitSummary& fit, d
   // A start no better than the empty set under the energy the passes minimize: its V pass empties the
   // set in one step and the run keeps the start (the hand, the pretzel: psi 0.03 and 0.06, IoU 0.35
   // and 0.26, docs/benchmarks.md §22).
-  if (start.psi >= 0) {
-    char text[1024];
+  // Both on the nodes and with the cell corners (a default run's energy): a start as good as the
+  // empty set can be on either side of 0 (the dragon's: -0.0011 and +0.00016).
+  const double psi = std::isnan(start.psi_between_nodes) ? start.psi : std::max(start.psi, start.psi_between_nodes);
+  if (psi >= 0) {
+    char both[160] = "";
+    if (!std::isnan(start.psi_between_nodes))
+      std::snprintf(both, sizeof both, " (%.3g on the target grid's nodes, %.3g with the cell corners)", start.psi,
+                    start.psi_between_nodes);
+    char text[1200];
     std::snprintf(text, sizeof text,
-                  "the monopole start scores psi = %.3g under the default energy, no better than the empty set "
+                  "the monopole start scores psi = %.3g under the default energy%s, no better than the empty set "
                   "(psi = 0), though its one-step IoU is %.3g: the passes would lead it to the empty set, and the run "
                   "would keep this start; %s. The monopoles' field has no level set that follows this shape (thin "
                   "parts, which a fit of a conductor's charges fills in); use the log-kernel fit (\"kind\": "
                   "\"log-kernel\", the default; --initializer log-kernel) (docs/fidelity.md §12)",
-                  start.psi, start.iou, fit_text);
+                  psi, both, start.iou, fit_text);
     v.refusal = text;
     return v;
   }
@@ -484,6 +491,7 @@ json FitSummary(const TargetResult& target, const O& o, const RationalMap& map, 
               {"iou", start.iou},
               {"saturated_fraction", start.saturated},
               {"psi", start.psi},
+              {"psi_between_nodes", std::isnan(start.psi_between_nodes) ? json() : json(start.psi_between_nodes)},
               {"inverted", start.inverted}}}};
   if (o.kind == "log-kernel") {
     s["log_kernel"] = {{"rows", kfit.rows},
@@ -546,7 +554,8 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
   monopole::KernelFitSummary kfit;
   double scan_seconds = 0;
   res.map = o.kind == "log-kernel" ? FitLogKernel(target, o, kfit) : FitMonopoleMap(target, o, mono, scan_seconds);
-  const monopole::StartCheck start = monopole::CheckStart(res.map, target.grid, o.guess.alpha);
+  monopole::StartCheck start = monopole::CheckStart(res.map, target.grid, o.guess.alpha);
+  if (o.kind == "monopoles") start.psi_between_nodes = monopole::StartEnergyBetweenNodes(res.map, target.grid, o.guess.alpha);
   JudgeStart(o, mono, start);
   const auto t2 = std::chrono::steady_clock::now();
   if (o.kind == "log-kernel") {

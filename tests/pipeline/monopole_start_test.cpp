@@ -66,6 +66,15 @@ TEST(MonopoleStart, AStartNoBetterThanTheEmptySetIsRefused) {
   monopole::StartCheck better = start;
   better.psi = -0.01;
   EXPECT_TRUE(Judge(0.0025, monopole::FitStop::kConverged, better).refusal.empty());
+  // Better than the empty set on the nodes but not with the cell corners a default run adds (the
+  // dragon's start): refused, with both figures.
+  better.psi_between_nodes = 0.00016;
+  const MonopoleStartVerdict corners = Judge(0.0025, monopole::FitStop::kConverged, better);
+  ASSERT_FALSE(corners.refusal.empty());
+  for (const char* part : {"psi = 0.00016", "-0.01 on the target grid's nodes", "0.00016 with the cell corners"})
+    EXPECT_NE(corners.refusal.find(part), std::string::npos) << part << " in: " << corners.refusal;
+  better.psi_between_nodes = -0.002;
+  EXPECT_TRUE(Judge(0.0025, monopole::FitStop::kConverged, better).refusal.empty());
 }
 
 // A sphere, small enough for seconds: the paper's fit converges and its start is upright, on the
@@ -88,6 +97,7 @@ TEST(MonopoleStart, TheSphereGetsAConvergedUprightStart) {
   EXPECT_EQ(r.summary.at("fit_stop").get<std::string>(), "converged");
   EXPECT_FALSE(r.summary.at("start").at("inverted").get<bool>());
   EXPECT_LT(r.summary.at("start").at("psi").get<double>(), 0.0);  // better than the empty set
+  EXPECT_LT(r.summary.at("start").at("psi_between_nodes").get<double>(), 0.0);  // with the corners too
   EXPECT_GT(r.summary.at("start").at("iou").get<double>(), 0.25);  // no low-overlap warning
   // The IoU scan (the default) starts unsaturated, with the best one-step IoU of the monopoles'
   // sets: at least the reference scan's, whose amplitude saturates the start.
