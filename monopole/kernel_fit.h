@@ -27,8 +27,8 @@
 
 #include <array>
 #include <cstdint>
-#include <string>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "quijibo/frame.h"
