@@ -419,13 +419,30 @@ RationalMap KernelFitMap(const std::vector<Vec3>& vertices, const std::vector<st
   return m;
 }
 
-StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alpha) {
-  const std::int64_t n = sdf.frame.cell_count();
+namespace {
+
+// L of `map` at the cells of `grid` (its slice).
+std::vector<double> LogModulusOn(const RationalMap& map, const GridFrame& frame, double slice) {
+  const std::int64_t n = frame.cell_count();
   std::vector<double> L(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static)
-  for (std::int64_t c = 0; c < n; ++c) {
-    L[c] = OneStepLogModulus(map, sdf.frame.cell_center(c));
-  }
+  for (std::int64_t c = 0; c < n; ++c) L[std::size_t(c)] = OneStepLogModulus(map, frame.cell_center(c), slice);
+  return L;
+}
+
+// sum_c -tanh(alpha L_c) W_c over the finite L, in cell order (the same sum on any thread count).
+double WeightedTanhSum(const EnergyGrid& g, const std::vector<double>& L, double alpha) {
+  double s = 0;
+  for (std::size_t c = 0; c < L.size(); ++c)
+    if (std::isfinite(L[c])) s += -std::tanh(alpha * L[c]) * g.weight[c];
+  return s;
+}
+
+}  // namespace
+
+StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alpha, bool between_nodes) {
+  const std::int64_t n = sdf.frame.cell_count();
+  const std::vector<double> L = LogModulusOn(map, sdf.frame, 0.0);
   std::vector<double> in, out;
   std::int64_t inter = 0, uni = 0, saturated = 0;
   for (std::int64_t c = 0; c < n; ++c) {
@@ -447,27 +464,16 @@ StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alph
   check.iou = IntersectionOverUnion(inter, uni);
   check.saturated = n ? double(saturated) / double(n) : 0;
   check.inverted = !(check.median_inside < check.median_outside);
-  check.psi = EnergyOfField(MakeEnergyGrid(sdf, kDefaultWeightField), L, alpha);
-  return check;
-}
-
-double StartEnergyBetweenNodes(const RationalMap& map, const ScalarGrid& sdf, double alpha) {
   const EnergyGrid nodes = MakeEnergyGrid(sdf, kDefaultWeightField);
-  const EnergyGrid corners = CornerGrid(sdf, kDefaultWeightField, nodes);
-  // Each cell's term first, summed in order after: the same sum on any number of threads.
-  auto sum = [&](const EnergyGrid& g) {
-    const std::int64_t n = g.frame.cell_count();
-    std::vector<double> term(static_cast<std::size_t>(n), 0.0);
-#pragma omp parallel for schedule(static)
-    for (std::int64_t c = 0; c < n; ++c) {
-      const double L = OneStepLogModulus(map, g.frame.cell_center(c), g.slice);
-      if (std::isfinite(L)) term[std::size_t(c)] = -std::tanh(alpha * L) * g.weight[std::size_t(c)];
-    }
-    double s = 0;
-    for (double t : term) s += t;
-    return s;
-  };
-  return (sum(nodes) + sum(corners)) / (nodes.eta + corners.eta) - TrivialSetEnergy({&nodes, &corners});
+  check.psi = EnergyOfField(nodes, L, alpha);
+  if (between_nodes) {
+    const EnergyGrid corners = CornerGrid(sdf, kDefaultWeightField, nodes);
+    const std::vector<double> Lc = LogModulusOn(map, corners.frame, corners.slice);
+    check.psi_between_nodes = (WeightedTanhSum(nodes, L, alpha) + WeightedTanhSum(corners, Lc, alpha)) /
+                                  (nodes.eta + corners.eta) -
+                              TrivialSetEnergy({&nodes, &corners});
+  }
+  return check;
 }
 
 }  // namespace quijibo::monopole

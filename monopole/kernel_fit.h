@@ -108,16 +108,12 @@ struct StartCheck {
   // psi of the start under the default weights (kDefaultWeightField) on the grid's cells, counted
   // from the better trivial set: >= 0 is no better than the empty set, which the passes then reach.
   double psi = 0;
-  // The same with the interior cell corners too (StartEnergyBetweenNodes), where computed (the
-  // monopole start's check); NaN where not.
+  // psi as a run with the default energy counts it at its start: on the cells and on their interior
+  // corners (`between_nodes` "on", CornerGrid). The two can differ in sign on a start as good as the
+  // empty set (the dragon's monopole start: -0.0011 on the cells, +0.00016 with the corners). NaN
+  // unless asked for (`between_nodes`): the corners cost a second evaluation of L.
   double psi_between_nodes = std::numeric_limits<double>::quiet_NaN();
 };
-StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alpha = 10.0);
-
-// psi of `map` as a run with the default energy counts it at its start: the default weights on the
-// grid's cells and on their interior corners (`between_nodes` "on", CornerGrid), counted from the
-// better trivial set. StartCheck::psi is the cells' alone; the two can differ in sign on a start as
-// good as the empty set (the dragon's monopole start: -0.0011 on the cells, +0.00016 with the corners).
-double StartEnergyBetweenNodes(const RationalMap& map, const ScalarGrid& sdf, double alpha = 10.0);
+StartCheck CheckStart(const RationalMap& map, const ScalarGrid& sdf, double alpha = 10.0, bool between_nodes = false);
 
 }  // namespace quijibo::monopole

@@ -554,8 +554,7 @@ InitialGuessResult InitialGuess(const TargetResult& target, const O& o) {
   monopole::KernelFitSummary kfit;
   double scan_seconds = 0;
   res.map = o.kind == "log-kernel" ? FitLogKernel(target, o, kfit) : FitMonopoleMap(target, o, mono, scan_seconds);
-  monopole::StartCheck start = monopole::CheckStart(res.map, target.grid, o.guess.alpha);
-  if (o.kind == "monopoles") start.psi_between_nodes = monopole::StartEnergyBetweenNodes(res.map, target.grid, o.guess.alpha);
+  const monopole::StartCheck start = monopole::CheckStart(res.map, target.grid, o.guess.alpha, o.kind == "monopoles");
   JudgeStart(o, mono, start);
   const auto t2 = std::chrono::steady_clock::now();
   if (o.kind == "log-kernel") {
